@@ -1,0 +1,185 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+//
+// hmc/codec.hpp — encoding a mesh or point set into an HMC stream, and
+// decoding a stream back into points, level by level.
+//
+// An HMC stream carries only vertex positions, quantized to a uniform grid of
+// 2^q cells per axis with one step for all three axes. It holds one or more
+// levels of detail; level 0 is the finest, and the stream sends the coarsest
+// level first. The decoded points of every level are exact: two conforming
+// decoders produce the same integer grid points, in the same canonical order
+// (ascending x, then y, then z).
+//
+// No function here throws. Decoding is safe on untrusted input: memory and
+// time are bounded by DecodeLimits, checked before anything is allocated.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hmc/mesh.hpp"
+#include "hmc/status.hpp"
+
+namespace hmc {
+
+/// What the points describe, and so what the decoder rebuilds from them.
+enum class Kind : std::uint8_t {
+  points = 0,   ///< a bare point set; no connectivity is rebuilt
+  surface = 1,  ///< all vertices lie on a surface (open or closed): triangles
+  volume = 2,   ///< boundary and interior vertices of a solid: tetrahedra
+};
+
+/// "points", "surface" or "volume".
+const char* kind_name(Kind k) noexcept;
+
+/// A vertex on the quantization grid; each coordinate is below 2^q.
+using GridPoint = std::array<std::uint32_t, 3>;
+
+/// The uniform scalar quantizer: grid coordinate i maps to origin + i * step
+/// on each axis (binary64, multiply then add, no fused multiply-add).
+struct ScalarQuantizer {
+  int bits = 12;       ///< q, 1 <= q <= 21
+  Vec3 origin{};       ///< position of grid point (0, 0, 0)
+  double step = 1.0;   ///< grid spacing, the same on all three axes
+
+  /// The position of a grid point.
+  Vec3 dequantize(const GridPoint& p) const noexcept;
+  /// The number of cells per axis, 2^q.
+  std::uint32_t cells() const noexcept { return std::uint32_t{1} << bits; }
+};
+
+/// The vector quantizer's codebook of displacement vectors, in grid units.
+struct VectorQuantizer {
+  std::vector<std::array<std::int32_t, 3>> codebook;
+};
+
+/// Encoder settings.
+struct EncodeOptions {
+  /// q, bits per axis of the quantization grid, 1..21.
+  int bits = 12;
+  /// The kind to record; when unset it is detected from the input
+  /// (tetrahedra: volume; triangles: surface; neither: points).
+  std::optional<Kind> kind;
+  /// Write the ancillary `info` chunk (encoder name, input statistics).
+  bool write_info = true;
+};
+
+/// Per-level figures of an encoded or decoded stream.
+struct LevelReport {
+  int lod = 0;                 ///< level index, 0 = finest
+  std::uint64_t points = 0;    ///< points of this level (cumulative)
+  std::uint64_t new_points = 0;///< points this level's layer adds
+  std::uint64_t layer_bytes = 0;  ///< bytes of this level's layer chunk(s), with framing
+  std::uint64_t stream_bytes = 0; ///< prefix of the stream that decodes this level
+};
+
+/// What the encoder did.
+struct EncodeReport {
+  Kind kind = Kind::points;
+  ScalarQuantizer quantizer;
+  std::uint64_t input_points = 0;       ///< points given
+  std::uint64_t distinct_points = 0;    ///< distinct grid points after quantization
+  std::uint64_t duplicates_merged = 0;  ///< input_points - distinct_points
+  std::uint64_t total_bytes = 0;
+  std::vector<LevelReport> levels;      ///< coarsest first
+};
+
+/// An encoded stream with its report.
+struct Encoded {
+  std::vector<std::uint8_t> bytes;
+  EncodeReport report;
+  /// The finest level's points as the decoder will output them
+  /// (distinct quantized input points, ascending).
+  std::vector<GridPoint> points;
+};
+
+/// Quantize and encode `input`. Errors: invalid_argument (bits out of range,
+/// empty input, NaN or infinite coordinates, coordinate range too large for
+/// binary64 steps).
+Result<Encoded> encode(const Mesh& input, const EncodeOptions& options = {});
+
+/// Caps on what a decoder will accept; the defaults suit untrusted input.
+struct DecodeLimits {
+  std::uint64_t max_points = std::uint64_t{1} << 26;  ///< points of the finest level
+  std::uint32_t max_levels = 64;                      ///< levels declared
+  std::uint64_t max_bytes = std::uint64_t{1} << 32;   ///< stream size
+};
+
+/// Decoder settings.
+struct DecodeOptions {
+  DecodeLimits limits;
+  /// Stop after this level (0 = decode down to the finest level).
+  int finest_level = 0;
+};
+
+/// One decoded level.
+struct DecodedLevel {
+  int lod = 0;                     ///< level index, 0 = finest
+  std::vector<GridPoint> points;   ///< canonical order: ascending (x, y, z)
+  std::uint64_t stream_bytes = 0;  ///< prefix length of the stream that decodes it
+};
+
+/// A decoded stream.
+struct Decoded {
+  Kind kind = Kind::points;
+  ScalarQuantizer quantizer;
+  std::uint8_t version_major = 0, version_minor = 0;
+  /// Levels the stream declares, and their point counts, coarsest first.
+  std::vector<std::uint64_t> declared_points;
+  std::optional<VectorQuantizer> vector_quantizer;
+  /// Decoded levels, coarsest first.
+  std::vector<DecodedLevel> levels;
+  /// True when the stream stopped before the requested level: `levels`
+  /// holds what was complete and `warning` says where it stopped.
+  bool truncated = false;
+  /// Set when the stream does not end with its end chunk (cut, or damaged
+  /// after the last level), even if every requested level was decoded.
+  std::string warning;
+  /// Contents of the ancillary `info` chunk, if present (key, value).
+  std::vector<std::pair<std::string, std::string>> info;
+
+  /// Number of levels the stream declares.
+  int level_count() const noexcept { return static_cast<int>(declared_points.size()); }
+  /// The finest decoded level (levels must not be empty).
+  const DecodedLevel& finest() const { return levels.back(); }
+};
+
+/// Decode a stream. A stream cut short after at least one complete level
+/// succeeds with `truncated` set; one cut before that fails with
+/// Status::truncated. Every other defect fails with its error class.
+Result<Decoded> decode(const std::uint8_t* data, std::size_t size, const DecodeOptions& options = {});
+
+/// One chunk as `inspect` sees it.
+struct ChunkInfo {
+  std::string type;
+  std::uint64_t offset = 0;  ///< of the chunk's type field
+  std::uint32_t length = 0;  ///< payload bytes
+  bool critical = false;
+  bool known = false;        ///< defined by the spec version this library implements
+};
+
+/// The structure of a stream, without decoding its layers.
+struct StreamInfo {
+  std::uint8_t version_major = 0, version_minor = 0;
+  Kind kind = Kind::points;
+  ScalarQuantizer quantizer;
+  std::vector<std::uint64_t> declared_points;  ///< coarsest first
+  std::vector<ChunkInfo> chunks;
+  std::vector<LevelReport> levels;  ///< complete levels present, coarsest first
+  std::uint64_t total_bytes = 0;
+  bool truncated = false;
+  std::string warning;
+};
+
+/// Parse framing, header and quantizer tables and list chunks and levels.
+Result<StreamInfo> inspect(const std::uint8_t* data, std::size_t size, const DecodeLimits& limits = {});
+
+/// The library version, "MAJOR.MINOR.PATCH".
+const char* version_string() noexcept;
+
+}  // namespace hmc

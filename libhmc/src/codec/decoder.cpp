@@ -1,0 +1,195 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <string>
+
+#include "codec/format.hpp"
+#include "pointset/octree.hpp"
+#include "util/error.hpp"
+
+namespace hmc {
+
+namespace {
+
+using namespace detail;
+
+std::vector<std::pair<std::string, std::string>> parse_info(const ChunkView& c) {
+  // Informative only: lines that are not key=value are ignored.
+  std::vector<std::pair<std::string, std::string>> kv;
+  std::string text(reinterpret_cast<const char*>(c.payload), c.length);
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t nl = text.find('\n', pos);
+    if (nl == std::string::npos) nl = text.size();
+    const std::string line = text.substr(pos, nl - pos);
+    const std::size_t eq = line.find('=');
+    if (eq != std::string::npos && eq > 0) kv.emplace_back(line.substr(0, eq), line.substr(eq + 1));
+    pos = nl + 1;
+  }
+  return kv;
+}
+
+/// Walks the chunk sequence, enforcing the order rules of spec "Chunk order",
+/// and calls back for the pieces a caller wants.
+struct ChunkWalker {
+  explicit ChunkWalker(const DecodeLimits& l) : limits(l) {}
+  const DecodeLimits& limits;
+  std::optional<Header> header;
+  std::optional<ScalarQuantizer> quantizer;
+  bool vq_seen = false;
+  std::size_t layers = 0;  // layer chunks seen (BASE, then refinements)
+  bool end_seen = false;
+
+  enum class Action { skip, header, quantizer, vector_quantizer, layer, end, info };
+
+  Action classify(const ChunkView& c) {
+    const std::string name = to_string(c.type) + " chunk at offset " + std::to_string(c.offset);
+    if (!header && c.type != kHead) fail(Status::bad_chunk, name + ": the first chunk must be HEAD");
+    if (!is_known_chunk(c.type)) {
+      if (is_critical(c.type)) fail(Status::bad_chunk, name + ": unknown critical chunk");
+      return Action::skip;
+    }
+    if (c.type == kInfo) return Action::info;
+    if (c.type == kHead) {
+      if (header) fail(Status::bad_chunk, name + ": second HEAD");
+      header = Header::read(c, limits);
+      return Action::header;
+    }
+    if (c.type == kScalarQuantizer) {
+      if (quantizer) fail(Status::bad_chunk, name + ": second SQNT");
+      quantizer = read_scalar_quantizer(c);
+      const std::uint64_t finest = header->points.back();
+      if (quantizer->bits < 21 && finest > (std::uint64_t{1} << (3 * quantizer->bits)))
+        fail(Status::bad_header, "HEAD declares " + std::to_string(finest) + " points, more than a 2^" +
+                                     std::to_string(quantizer->bits) + " grid holds");
+      return Action::quantizer;
+    }
+    if (!quantizer) fail(Status::bad_chunk, name + ": SQNT must come before it");
+    if (c.type == kVectorQuantizer) {
+      if (vq_seen) fail(Status::bad_chunk, name + ": second VQTB");
+      if (layers) fail(Status::bad_chunk, name + ": VQTB must come before the base layer");
+      vq_seen = true;
+      return Action::vector_quantizer;
+    }
+    if (c.type == kBaseLayer) {
+      if (layers) fail(Status::bad_chunk, name + ": second BASE");
+      ++layers;
+      return Action::layer;
+    }
+    // HEND
+    if (c.length != 0) fail(Status::bad_chunk, name + ": HEND must be empty");
+    if (layers != header->points.size())
+      fail(Status::bad_chunk, name + ": HEND after " + std::to_string(layers) + " of " +
+                                  std::to_string(header->points.size()) + " declared levels");
+    end_seen = true;
+    return Action::end;
+  }
+};
+
+void check_size(std::size_t size, const DecodeLimits& limits) {
+  if (size > limits.max_bytes)
+    fail(Status::limit_exceeded, "the stream has " + std::to_string(size) + " bytes, over the limit of " +
+                                     std::to_string(limits.max_bytes));
+}
+
+std::string truncation_warning(const ContainerView& view, const ChunkWalker& walk) {
+  std::string why = view.truncated ? view.truncation : "the stream ends before HEND";
+  return why + "; decoded " + std::to_string(walk.layers) + " of " + std::to_string(walk.header->points.size()) +
+         " levels";
+}
+
+Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOptions& options) {
+  check_size(size, options.limits);
+  const ContainerView view = parse_container(data, size, kEnd);
+  Decoded out;
+  out.version_major = view.major;
+  out.version_minor = view.minor;
+  ChunkWalker walk(options.limits);
+  for (const ChunkView& c : view.chunks) {
+    switch (walk.classify(c)) {
+      case ChunkWalker::Action::header:
+        out.kind = walk.header->kind;
+        out.declared_points = walk.header->points;
+        break;
+      case ChunkWalker::Action::quantizer: out.quantizer = *walk.quantizer; break;
+      case ChunkWalker::Action::vector_quantizer: out.vector_quantizer = read_vector_quantizer(c); break;
+      case ChunkWalker::Action::info: out.info = parse_info(c); break;
+      case ChunkWalker::Action::layer: {
+        // Layers after the requested level are checked for order only.
+        if (!out.levels.empty() && out.levels.back().lod <= options.finest_level) break;
+        if (c.length < 1) fail(Status::bad_layer, "BASE: empty payload");
+        if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
+          fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
+        DecodedLevel level;
+        level.lod = static_cast<int>(walk.header->points.size()) - 1;
+        level.points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, walk.header->points.front());
+        level.stream_bytes = c.offset + kChunkOverhead + c.length;
+        out.levels.push_back(std::move(level));
+        break;
+      }
+      case ChunkWalker::Action::skip:
+      case ChunkWalker::Action::end: break;
+    }
+  }
+  if (!walk.end_seen) {
+    if (out.levels.empty())
+      fail(Status::truncated, view.truncated ? view.truncation + "; no complete level"
+                                             : std::string("the stream ends before its first level is complete"));
+    // Without the end chunk the stream may have been cut: say so, and call
+    // it truncated when the requested level is missing.
+    out.warning = truncation_warning(view, walk);
+    out.truncated = out.levels.back().lod > options.finest_level;
+  }
+  return out;
+}
+
+StreamInfo inspect_impl(const std::uint8_t* data, std::size_t size, const DecodeLimits& limits) {
+  check_size(size, limits);
+  const ContainerView view = parse_container(data, size, kEnd);
+  StreamInfo info;
+  info.version_major = view.major;
+  info.version_minor = view.minor;
+  info.total_bytes = size;
+  ChunkWalker walk(limits);
+  for (const ChunkView& c : view.chunks) {
+    ChunkInfo ci;
+    ci.type = to_string(c.type);
+    ci.offset = c.offset;
+    ci.length = c.length;
+    ci.critical = is_critical(c.type);
+    ci.known = is_known_chunk(c.type);
+    info.chunks.push_back(ci);
+    const auto action = walk.classify(c);
+    if (action == ChunkWalker::Action::header) {
+      info.kind = walk.header->kind;
+      info.declared_points = walk.header->points;
+    } else if (action == ChunkWalker::Action::quantizer) {
+      info.quantizer = *walk.quantizer;
+    } else if (action == ChunkWalker::Action::layer) {
+      LevelReport lr;
+      const std::size_t k = walk.layers - 1;
+      lr.lod = static_cast<int>(walk.header->points.size() - 1 - k);
+      lr.points = walk.header->points[k];
+      lr.new_points = lr.points - (k ? walk.header->points[k - 1] : 0);
+      lr.layer_bytes = kChunkOverhead + c.length;
+      lr.stream_bytes = c.offset + kChunkOverhead + c.length;
+      info.levels.push_back(lr);
+    }
+  }
+  if (!walk.end_seen) {
+    info.truncated = true;
+    info.warning = walk.header ? truncation_warning(view, walk)
+                               : (view.truncated ? view.truncation : std::string("no HEAD chunk"));
+  }
+  return info;
+}
+
+}  // namespace
+
+Result<Decoded> decode(const std::uint8_t* data, std::size_t size, const DecodeOptions& options) {
+  return guarded<Result<Decoded>>([&] { return Result<Decoded>(decode_impl(data, size, options)); });
+}
+
+Result<StreamInfo> inspect(const std::uint8_t* data, std::size_t size, const DecodeLimits& limits) {
+  return guarded<Result<StreamInfo>>([&] { return Result<StreamInfo>(inspect_impl(data, size, limits)); });
+}
+
+}  // namespace hmc

@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "codec/format.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "util/bytes.hpp"
+#include "util/error.hpp"
+
+namespace hmc::detail {
+
+namespace {
+
+void expect_consumed(const ByteReader& r, const ChunkView& c) {
+  if (!r.at_end())
+    fail(Status::bad_header, to_string(c.type) + ": " + std::to_string(r.remaining()) +
+                                 " unexpected byte(s) at the end of the payload");
+}
+
+}  // namespace
+
+bool is_known_chunk(const ChunkType& t) {
+  return t == kHead || t == kScalarQuantizer || t == kVectorQuantizer || t == kBaseLayer || t == kEnd || t == kInfo;
+}
+
+std::vector<std::uint8_t> Header::write() const {
+  ByteWriter w;
+  w.u8(static_cast<std::uint8_t>(kind));
+  w.u8(0);  // flags, reserved
+  w.varint(points.size());
+  for (std::uint64_t n : points) w.varint(n);
+  return std::move(w.data());
+}
+
+Header Header::read(const ChunkView& c, const DecodeLimits& limits) {
+  ByteReader r(c.payload, c.length, Status::bad_header, "HEAD");
+  Header h;
+  const std::uint8_t kind = r.u8();
+  if (kind > 2) fail(Status::bad_header, "HEAD: kind " + std::to_string(kind) + " is not 0, 1 or 2");
+  h.kind = static_cast<Kind>(kind);
+  const std::uint8_t flags = r.u8();
+  if (flags != 0) fail(Status::bad_header, "HEAD: reserved flags are " + std::to_string(flags) + ", must be 0");
+  const std::uint64_t levels = r.varint();
+  if (levels < 1 || levels > kMaxLevels)
+    fail(Status::bad_header, "HEAD: level count " + std::to_string(levels) + " is outside 1..64");
+  if (levels > limits.max_levels)
+    fail(Status::limit_exceeded, "HEAD: " + std::to_string(levels) + " levels, over the limit of " +
+                                     std::to_string(limits.max_levels));
+  std::uint64_t prev = 0;
+  for (std::uint64_t i = 0; i < levels; ++i) {
+    const std::uint64_t n = r.varint();
+    if (n <= prev)
+      fail(Status::bad_header, "HEAD: point count of level " + std::to_string(levels - 1 - i) + " (" +
+                                   std::to_string(n) + ") must exceed the coarser level's (" + std::to_string(prev) + ")");
+    h.points.push_back(n);
+    prev = n;
+  }
+  if (prev > limits.max_points)
+    fail(Status::limit_exceeded, "HEAD: " + std::to_string(prev) + " points, over the limit of " +
+                                     std::to_string(limits.max_points));
+  expect_consumed(r, c);
+  return h;
+}
+
+std::vector<std::uint8_t> write_scalar_quantizer(const ScalarQuantizer& q) {
+  ByteWriter w;
+  w.u8(static_cast<std::uint8_t>(q.bits));
+  for (double o : q.origin) w.f64(o);
+  w.f64(q.step);
+  return std::move(w.data());
+}
+
+ScalarQuantizer read_scalar_quantizer(const ChunkView& c) {
+  ByteReader r(c.payload, c.length, Status::bad_header, "SQNT");
+  ScalarQuantizer q;
+  q.bits = r.u8();
+  if (q.bits < kMinBits || q.bits > kMaxBits)
+    fail(Status::bad_header, "SQNT: q = " + std::to_string(q.bits) + " is outside 1..21");
+  for (double& o : q.origin) {
+    o = r.f64();
+    if (!std::isfinite(o)) fail(Status::bad_header, "SQNT: origin is not finite");
+  }
+  q.step = r.f64();
+  if (!std::isfinite(q.step) || !(q.step > 0)) fail(Status::bad_header, "SQNT: step is not a finite positive number");
+  expect_consumed(r, c);
+  return q;
+}
+
+std::vector<std::uint8_t> write_vector_quantizer(const VectorQuantizer& vq) {
+  ByteWriter w;
+  w.u8(3);
+  w.varint(vq.codebook.size());
+  for (const auto& v : vq.codebook)
+    for (std::int32_t x : v) w.svarint(x);
+  return std::move(w.data());
+}
+
+VectorQuantizer read_vector_quantizer(const ChunkView& c) {
+  ByteReader r(c.payload, c.length, Status::bad_header, "VQTB");
+  const std::uint8_t dim = r.u8();
+  if (dim != 3) fail(Status::bad_header, "VQTB: dimension " + std::to_string(dim) + " is not 3");
+  const std::uint64_t k = r.varint();
+  if (k < 1 || k > kMaxCodebookSize)
+    fail(Status::bad_header, "VQTB: codebook size " + std::to_string(k) + " is outside 1..65536");
+  // Each entry needs at least three bytes: refuse before allocating.
+  if (k * 3 > r.remaining())
+    fail(Status::bad_header, "VQTB: " + std::to_string(k) + " entries cannot fit in " +
+                                 std::to_string(r.remaining()) + " bytes");
+  VectorQuantizer vq;
+  vq.codebook.resize(k);
+  constexpr std::int64_t kLimit = (std::int64_t{1} << kMaxBits) - 1;
+  for (auto& v : vq.codebook)
+    for (std::int32_t& x : v) {
+      const std::int64_t s = r.svarint();
+      if (s < -kLimit || s > kLimit)
+        fail(Status::bad_header, "VQTB: component " + std::to_string(s) + " is outside ±(2^21 - 1)");
+      x = static_cast<std::int32_t>(s);
+    }
+  expect_consumed(r, c);
+  return vq;
+}
+
+}  // namespace hmc::detail

@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// The chunks HMC defines and the syntax of the header and quantizer tables
+// (spec "Chunks", "Header", "Scalar-quantizer table", "Vector-quantizer
+// table"). Each field is declared once here and used to both read and write.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "container/container.hpp"
+#include "hmc/codec.hpp"
+
+namespace hmc::detail {
+
+inline constexpr ChunkType kHead = chunk_type("HEAD");
+inline constexpr ChunkType kScalarQuantizer = chunk_type("SQNT");
+inline constexpr ChunkType kVectorQuantizer = chunk_type("VQTB");
+inline constexpr ChunkType kBaseLayer = chunk_type("BASE");
+inline constexpr ChunkType kEnd = chunk_type("HEND");
+inline constexpr ChunkType kInfo = chunk_type("info");
+
+/// True for the chunk types this version defines.
+bool is_known_chunk(const ChunkType& t);
+
+constexpr int kMinBits = 1;
+constexpr int kMaxBits = 21;
+constexpr std::uint32_t kMaxLevels = 64;
+constexpr std::uint32_t kMaxCodebookSize = 65536;
+
+/// HEAD: kind, reserved flags, level count and per-level point counts.
+struct Header {
+  Kind kind = Kind::points;
+  std::vector<std::uint64_t> points;  ///< cumulative point count per level, coarsest first
+
+  std::vector<std::uint8_t> write() const;
+  static Header read(const ChunkView& c, const DecodeLimits& limits);
+};
+
+std::vector<std::uint8_t> write_scalar_quantizer(const ScalarQuantizer& q);
+ScalarQuantizer read_scalar_quantizer(const ChunkView& c);
+
+std::vector<std::uint8_t> write_vector_quantizer(const VectorQuantizer& vq);
+VectorQuantizer read_vector_quantizer(const ChunkView& c);
+
+/// Base-layer coders (first byte of BASE).
+enum class BaseCoder : std::uint8_t { octree = 0 };
+
+}  // namespace hmc::detail

@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "container/container.hpp"
+
+#include <zlib.h>
+
+#include <cstring>
+
+#include "util/bytes.hpp"
+#include "util/error.hpp"
+
+namespace hmc::detail {
+
+std::uint32_t chunk_crc(const ChunkType& type, const std::uint8_t* payload, std::size_t n) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  crc = crc32(crc, reinterpret_cast<const Bytef*>(type.data()), 4);
+  // zlib takes uInt lengths: feed large payloads in pieces.
+  while (n) {
+    const uInt piece = n > 0x40000000u ? 0x40000000u : static_cast<uInt>(n);
+    crc = crc32(crc, payload, piece);
+    payload += piece;
+    n -= piece;
+  }
+  return static_cast<std::uint32_t>(crc);
+}
+
+ContainerWriter::ContainerWriter() {
+  out_.assign(std::begin(kSignature), std::end(kSignature));
+  out_.push_back(kVersionMajor);
+  out_.push_back(kVersionMinor);
+}
+
+void ContainerWriter::chunk(const ChunkType& type, const std::vector<std::uint8_t>& payload) {
+  if (payload.size() > kMaxChunkLength) fail(Status::invalid_argument, "chunk " + to_string(type) + " is too large");
+  ByteWriter w;
+  w.bytes(reinterpret_cast<const std::uint8_t*>(type.data()), 4);
+  w.u32(static_cast<std::uint32_t>(payload.size()));
+  w.bytes(payload);
+  w.u32(chunk_crc(type, payload.data(), payload.size()));
+  out_.insert(out_.end(), w.data().begin(), w.data().end());
+}
+
+ContainerView parse_container(const std::uint8_t* data, std::size_t size, const ChunkType& stop_after) {
+  ContainerView v;
+  if (size == 0) {
+    v.truncated = true;
+    v.truncation = "the stream is empty";
+    return v;
+  }
+  const std::size_t sig = sizeof kSignature;
+  if (std::memcmp(data, kSignature, size < sig ? size : sig) != 0)
+    fail(Status::bad_magic, "the first bytes are not the HMC signature 89 48 4D 43 0D 0A 1A 0A");
+  if (size < kPreambleSize) {
+    v.truncated = true;
+    v.truncation = "the stream ends inside the signature or version (" + std::to_string(size) + " bytes)";
+    return v;
+  }
+  v.major = data[8];
+  v.minor = data[9];
+  if (v.major != kVersionMajor)
+    fail(Status::unsupported_version, "stream version " + std::to_string(v.major) + "." + std::to_string(v.minor) +
+                                          "; this decoder reads major version " + std::to_string(kVersionMajor));
+  std::size_t pos = kPreambleSize;
+  while (pos < size) {
+    if (size - pos < 8) {
+      v.truncated = true;
+      v.truncation = "the stream ends inside a chunk header at offset " + std::to_string(pos);
+      return v;
+    }
+    ChunkView c;
+    c.offset = pos;
+    std::memcpy(c.type.data(), data + pos, 4);
+    for (char ch : c.type)
+      if (!((ch >= 'A' && ch <= 'Z') || (ch >= 'a' && ch <= 'z')))
+        fail(Status::bad_chunk, "chunk at offset " + std::to_string(pos) + " has a type that is not four ASCII letters");
+    ByteReader r(data + pos + 4, 4, Status::truncated, "chunk length");
+    c.length = r.u32();
+    if (c.length > kMaxChunkLength)
+      fail(Status::bad_chunk, "chunk " + to_string(c.type) + " at offset " + std::to_string(pos) + " declares length " +
+                                  std::to_string(c.length) + ", over the maximum 2^31-1");
+    if (size - pos - 8 < std::uint64_t{c.length} + 4) {
+      v.truncated = true;
+      v.truncation = "the stream ends inside chunk " + to_string(c.type) + " at offset " + std::to_string(pos) + " (" +
+                     std::to_string(c.length) + "-byte payload declared, " + std::to_string(size - pos - 8) +
+                     " bytes left)";
+      return v;
+    }
+    c.payload = data + pos + 8;
+    ByteReader cr(c.payload + c.length, 4, Status::truncated, "chunk CRC");
+    const std::uint32_t stored = cr.u32();
+    const std::uint32_t actual = chunk_crc(c.type, c.payload, c.length);
+    if (stored != actual)
+      fail(Status::crc_mismatch, "chunk " + to_string(c.type) + " at offset " + std::to_string(pos) +
+                                     ": CRC-32 mismatch (stored " + std::to_string(stored) + ", computed " +
+                                     std::to_string(actual) + ")");
+    v.chunks.push_back(c);
+    pos += kChunkOverhead + c.length;
+    if (c.type == stop_after) {
+      if (pos != size)
+        fail(Status::bad_chunk, std::to_string(size - pos) + " byte(s) follow the end chunk " + to_string(stop_after));
+      break;
+    }
+  }
+  v.ended = true;
+  return v;
+}
+
+}  // namespace hmc::detail

@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Bit packing (spec "Conventions: bit order"): bits fill each byte from its
+// most significant bit down; a field of n bits is written most significant
+// bit first. A bit stream ends with zero bits up to the next byte boundary.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "util/error.hpp"
+
+namespace hmc::detail {
+
+class BitWriter {
+ public:
+  /// Append the low `n` bits of `v` (n <= 32), most significant first.
+  void put(std::uint32_t v, int n) {
+    for (int i = n - 1; i >= 0; --i) {
+      acc_ = static_cast<std::uint8_t>((acc_ << 1) | ((v >> i) & 1u));
+      if (++nacc_ == 8) {
+        out_.push_back(acc_);
+        acc_ = 0;
+        nacc_ = 0;
+      }
+    }
+  }
+  /// Order-0 exponential-Golomb code of v (v < 2^31).
+  void exp_golomb(std::uint32_t v) {
+    std::uint32_t x = v + 1;
+    int bits = 0;
+    while ((x >> bits) > 1) ++bits;
+    put(0, bits);
+    put(x, bits + 1);
+  }
+  /// Pad with zero bits to a byte boundary and return the bytes.
+  std::vector<std::uint8_t> finish() {
+    if (nacc_) put(0, 8 - nacc_);
+    return std::move(out_);
+  }
+  std::uint64_t bit_count() const { return out_.size() * 8 + static_cast<std::uint64_t>(nacc_); }
+
+ private:
+  std::vector<std::uint8_t> out_;
+  std::uint8_t acc_ = 0;
+  int nacc_ = 0;
+};
+
+/// Reads bits from a bounded buffer. Reading past the end raises bad_layer.
+class BitReader {
+ public:
+  BitReader(const std::uint8_t* p, std::size_t n, std::string what) : p_(p), nbits_(n * 8), what_(std::move(what)) {}
+
+  std::uint32_t get(int n) {
+    if (static_cast<std::uint64_t>(n) > nbits_ - pos_) overrun();
+    std::uint32_t v = 0;
+    for (int i = 0; i < n; ++i, ++pos_) v = (v << 1) | ((p_[pos_ >> 3] >> (7 - (pos_ & 7))) & 1u);
+    return v;
+  }
+  /// The next `n` bits (n <= 24) without consuming them; zeros past the end.
+  std::uint32_t peek(int n) const {
+    std::uint32_t v = 0;
+    std::uint64_t q = pos_;
+    for (int i = 0; i < n; ++i, ++q) v = (v << 1) | (q < nbits_ ? ((p_[q >> 3] >> (7 - (q & 7))) & 1u) : 0u);
+    return v;
+  }
+  void consume(int n) {
+    if (static_cast<std::uint64_t>(n) > nbits_ - pos_) overrun();
+    pos_ += static_cast<std::uint64_t>(n);
+  }
+  std::uint32_t exp_golomb() {
+    int zeros = 0;
+    while (get(1) == 0)
+      if (++zeros > 31) fail(Status::bad_layer, what_ + ": exp-Golomb prefix longer than 31 bits");
+    std::uint64_t x = (std::uint64_t{1} << zeros) | get(zeros);
+    return static_cast<std::uint32_t>(x - 1);
+  }
+  /// Require that only zero padding to the next byte boundary remains and
+  /// that it is the end of the buffer.
+  void expect_end() {
+    std::uint64_t pad = (8 - (pos_ & 7)) & 7;
+    if (pad > nbits_ - pos_ || get(static_cast<int>(pad)) != 0)
+      fail(Status::bad_layer, what_ + ": non-zero padding bits");
+    if (pos_ != nbits_)
+      fail(Status::bad_layer, what_ + ": " + std::to_string((nbits_ - pos_) / 8) + " unused byte(s) after the bit stream");
+  }
+  std::uint64_t bits_left() const { return nbits_ - pos_; }
+
+ private:
+  [[noreturn]] void overrun() const {
+    fail(Status::bad_layer, what_ + ": bit stream ends early (at bit " + std::to_string(pos_) + " of " +
+                                std::to_string(nbits_) + ")");
+  }
+  const std::uint8_t* p_;
+  std::uint64_t nbits_;
+  std::uint64_t pos_ = 0;
+  std::string what_;
+};
+
+}  // namespace hmc::detail

@@ -1,0 +1,196 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "entropy/huffman.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+namespace hmc::detail {
+
+namespace {
+
+int symbol_width(std::uint32_t alphabet) {
+  int w = 1;
+  while ((std::uint64_t{1} << w) < alphabet) ++w;
+  return w;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> huffman_lengths(const std::vector<std::uint64_t>& freq, int max_len) {
+  std::vector<std::uint8_t> len(freq.size(), 0);
+  std::vector<std::uint32_t> used;
+  for (std::uint32_t s = 0; s < freq.size(); ++s)
+    if (freq[s]) used.push_back(s);
+  if (used.size() < 2) return len;
+  if ((std::size_t{1} << max_len) < used.size()) fail(Status::internal_error, "alphabet too large for code length limit");
+
+  // Package-merge (Larmore & Hirschberg). Each item carries how many times
+  // each leaf occurs inside it; the 2n-2 lightest items of the final list
+  // give each leaf's code length.
+  std::sort(used.begin(), used.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return freq[a] != freq[b] ? freq[a] < freq[b] : a < b;
+  });
+  const std::size_t n = used.size();
+  struct Item {
+    std::uint64_t weight;
+    std::vector<std::uint16_t> count;  // per position in `used`
+  };
+  std::vector<Item> leaves(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    leaves[i].weight = freq[used[i]];
+    leaves[i].count.assign(n, 0);
+    leaves[i].count[i] = 1;
+  }
+  std::vector<Item> list = leaves;
+  for (int level = 1; level < max_len; ++level) {
+    std::vector<Item> packages;
+    for (std::size_t i = 0; i + 1 < list.size(); i += 2) {
+      Item p{list[i].weight + list[i + 1].weight, list[i].count};
+      for (std::size_t k = 0; k < n; ++k) p.count[k] = static_cast<std::uint16_t>(p.count[k] + list[i + 1].count[k]);
+      packages.push_back(std::move(p));
+    }
+    std::vector<Item> merged;
+    merged.reserve(n + packages.size());
+    std::size_t a = 0, b = 0;
+    while (a < n || b < packages.size()) {
+      // Leaves go first on equal weight: deterministic and keeps codes short.
+      if (b >= packages.size() || (a < n && leaves[a].weight <= packages[b].weight))
+        merged.push_back(leaves[a++]);
+      else
+        merged.push_back(std::move(packages[b++]));
+    }
+    list = std::move(merged);
+  }
+  for (std::size_t i = 0; i < 2 * n - 2; ++i)
+    for (std::size_t k = 0; k < n; ++k) len[used[k]] = static_cast<std::uint8_t>(len[used[k]] + list[i].count[k]);
+  return len;
+}
+
+HuffmanCode HuffmanCode::from_lengths(const std::vector<std::uint8_t>& lengths, const std::string& what) {
+  HuffmanCode c;
+  c.what_ = what;
+  c.lengths_ = lengths;
+  std::uint32_t used = 0;
+  std::uint64_t kraft = 0;
+  for (std::uint32_t s = 0; s < lengths.size(); ++s) {
+    if (lengths[s] > kHuffmanMaxLength)
+      fail(Status::bad_huffman_table, what + ": code length " + std::to_string(lengths[s]) + " exceeds 15");
+    if (lengths[s]) {
+      ++used;
+      kraft += std::uint64_t{1} << (kHuffmanMaxLength - lengths[s]);
+    }
+  }
+  if (used < 2) fail(Status::bad_huffman_table, what + ": fewer than two symbols have a code length");
+  if (kraft != (std::uint64_t{1} << kHuffmanMaxLength))
+    fail(Status::bad_huffman_table,
+         what + (kraft > (std::uint64_t{1} << kHuffmanMaxLength) ? ": code lengths are over-subscribed"
+                                                                 : ": code lengths are incomplete"));
+  c.assign_codes();
+  return c;
+}
+
+HuffmanCode HuffmanCode::from_frequencies(const std::vector<std::uint64_t>& freq) {
+  std::uint32_t used = 0, last = 0;
+  for (std::uint32_t s = 0; s < freq.size(); ++s)
+    if (freq[s]) ++used, last = s;
+  if (used <= 1) {
+    HuffmanCode c;
+    c.single_ = true;
+    c.single_symbol_ = last;
+    c.lengths_.assign(freq.size(), 0);
+    c.codes_.assign(freq.size(), 0);
+    return c;
+  }
+  return from_lengths(huffman_lengths(freq), "encoder");
+}
+
+void HuffmanCode::assign_codes() {
+  const auto a = static_cast<std::uint32_t>(lengths_.size());
+  codes_.assign(a, 0);
+  sorted_.resize(a);
+  std::iota(sorted_.begin(), sorted_.end(), 0u);
+  std::stable_sort(sorted_.begin(), sorted_.end(),
+                   [&](std::uint32_t x, std::uint32_t y) { return lengths_[x] < lengths_[y]; });
+  std::uint32_t code = 0;
+  std::uint32_t index = 0;
+  while (index < a && lengths_[sorted_[index]] == 0) ++index;
+  int prev = 0;
+  for (int len = 1; len <= kHuffmanMaxLength; ++len) {
+    code <<= (len - prev);
+    prev = len;
+    first_code_[len] = code;
+    first_index_[len] = index;
+    while (index < a && lengths_[sorted_[index]] == len) codes_[sorted_[index++]] = code++;
+    // Left-justified end of this length's codes: a 15-bit peek below it
+    // decodes with a length <= len.
+    limit_[len] = code << (kHuffmanMaxLength - len);
+  }
+}
+
+HuffmanCode HuffmanCode::read(BitReader& in, std::uint32_t alphabet, const std::string& what) {
+  if (in.get(1)) {
+    HuffmanCode c;
+    c.what_ = what;
+    c.single_ = true;
+    c.single_symbol_ = in.get(symbol_width(alphabet));
+    if (c.single_symbol_ >= alphabet)
+      fail(Status::bad_huffman_table, what + ": single symbol " + std::to_string(c.single_symbol_) +
+                                          " outside the alphabet of " + std::to_string(alphabet));
+    c.lengths_.assign(alphabet, 0);
+    return c;
+  }
+  std::vector<std::uint8_t> lengths(alphabet, 0);
+  std::uint32_t s = 0;
+  while (s < alphabet) {
+    std::uint32_t v = in.get(4);
+    if (v) {
+      lengths[s++] = static_cast<std::uint8_t>(v);
+    } else {
+      std::uint64_t run = std::uint64_t{in.exp_golomb()} + 1;
+      if (run > alphabet - s)
+        fail(Status::bad_huffman_table, what + ": zero run of " + std::to_string(run) + " passes the end of the alphabet");
+      s += static_cast<std::uint32_t>(run);
+    }
+  }
+  return from_lengths(lengths, what);
+}
+
+void HuffmanCode::write(BitWriter& out) const {
+  const std::uint32_t a = alphabet();
+  if (single_) {
+    out.put(1, 1);
+    out.put(single_symbol_, symbol_width(a));
+    return;
+  }
+  out.put(0, 1);
+  std::uint32_t s = 0;
+  while (s < a) {
+    if (lengths_[s]) {
+      out.put(lengths_[s++], 4);
+      continue;
+    }
+    std::uint32_t run = 0;
+    while (s + run < a && lengths_[s + run] == 0) ++run;
+    out.put(0, 4);
+    out.exp_golomb(run - 1);
+    s += run;
+  }
+}
+
+std::uint32_t HuffmanCode::decode(BitReader& in) const {
+  if (single_) return single_symbol_;
+  const std::uint32_t peek = in.peek(kHuffmanMaxLength);
+  int len = 1;
+  while (peek >= limit_[len]) ++len;  // terminates: the code is complete, limit_[15] == 2^15
+  in.consume(len);
+  const std::uint32_t code = peek >> (kHuffmanMaxLength - len);
+  return sorted_[first_index_[len] + (code - first_code_[len])];
+}
+
+std::uint64_t HuffmanCode::cost(const std::vector<std::uint64_t>& freq) const {
+  std::uint64_t bits = 0;
+  for (std::size_t s = 0; s < freq.size() && s < lengths_.size(); ++s) bits += freq[s] * lengths_[s];
+  return bits;
+}
+
+}  // namespace hmc::detail

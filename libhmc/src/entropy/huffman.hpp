@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Canonical Huffman codes (spec "Canonical Huffman codes"): length-limited
+// code construction, the code-length table syntax, encoding and decoding.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "entropy/bitio.hpp"
+
+namespace hmc::detail {
+
+constexpr int kHuffmanMaxLength = 15;
+
+/// Optimal code lengths (<= max_len) for the given symbol frequencies, by
+/// package-merge; ties broken by symbol value so the result is deterministic.
+/// Symbols with zero frequency get length 0. A single used symbol gets length
+/// 0 as well (it is sent with the single-symbol form and costs no bits).
+std::vector<std::uint8_t> huffman_lengths(const std::vector<std::uint64_t>& freq, int max_len = kHuffmanMaxLength);
+
+/// A canonical code over an alphabet of `size` symbols.
+class HuffmanCode {
+ public:
+  /// Build from code lengths; validates them (bad_huffman_table on failure).
+  static HuffmanCode from_lengths(const std::vector<std::uint8_t>& lengths, const std::string& what);
+  /// Build from frequencies (encoder side).
+  static HuffmanCode from_frequencies(const std::vector<std::uint64_t>& freq);
+  /// Read the table syntax for an alphabet of `alphabet` symbols.
+  static HuffmanCode read(BitReader& in, std::uint32_t alphabet, const std::string& what);
+
+  /// Write the table syntax.
+  void write(BitWriter& out) const;
+  void encode(BitWriter& out, std::uint32_t symbol) const {
+    if (single_) return;
+    out.put(codes_[symbol], lengths_[symbol]);
+  }
+  std::uint32_t decode(BitReader& in) const;
+
+  std::uint32_t alphabet() const { return static_cast<std::uint32_t>(lengths_.size()); }
+  int length(std::uint32_t symbol) const { return lengths_[symbol]; }
+  /// Total bits to code `freq` with this code.
+  std::uint64_t cost(const std::vector<std::uint64_t>& freq) const;
+
+ private:
+  void assign_codes();
+  bool single_ = false;
+  std::uint32_t single_symbol_ = 0;
+  std::vector<std::uint8_t> lengths_;
+  std::vector<std::uint32_t> codes_;
+  // Decoding: symbols sorted by (length, value) and, per length, the first
+  // code left-justified to 15 bits and the index of its first symbol.
+  std::vector<std::uint32_t> sorted_;
+  std::uint32_t limit_[kHuffmanMaxLength + 2] = {};
+  std::uint32_t first_code_[kHuffmanMaxLength + 1] = {};
+  std::uint32_t first_index_[kHuffmanMaxLength + 1] = {};
+  std::string what_;
+};
+
+}  // namespace hmc::detail

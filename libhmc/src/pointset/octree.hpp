@@ -1,0 +1,32 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Octree occupancy coding of a set of grid points (spec "Base layer:
+// octree coder"). The set is coded, not a sequence: the stream is the same
+// for any order of the input, and the decoder outputs the points in
+// canonical order.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "hmc/codec.hpp"
+
+namespace hmc::detail {
+
+/// Code distinct points (any order) on a 2^q grid. Returns the bit-stream
+/// bytes (padded to a byte boundary).
+std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, int q);
+
+/// Decode exactly `n` points; raises bad_layer / bad_huffman_table on a
+/// malformed payload. The result is in canonical (x, y, z) ascending order.
+std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n);
+
+/// Morton key of a point: bits interleaved x, y, z from the most significant
+/// bit down, so that the 3-bit group at depth d is the child index
+/// (x_bit << 2) | (y_bit << 1) | z_bit.
+std::uint64_t morton_key(const GridPoint& p, int q);
+GridPoint morton_point(std::uint64_t key, int q);
+
+/// Sort points into canonical order (ascending x, then y, then z).
+void sort_canonical(std::vector<GridPoint>& points);
+
+}  // namespace hmc::detail

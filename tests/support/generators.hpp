@@ -1,0 +1,40 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Generated test inputs: every test builds its own data, nothing is read
+// from outside the repository.
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "hmc/mesh.hpp"
+
+namespace hmc::testgen {
+
+/// Deterministic random source for tests.
+using Rng = std::mt19937_64;
+
+/// Triangulated UV sphere (closed surface) with `rings` x `segments` quads.
+Mesh uv_sphere(int rings, int segments, double radius = 1.0);
+/// Triangulated torus (closed, genus 1) on a `nu` x `nv` grid.
+Mesh torus(int nu, int nv, double major = 1.0, double minor = 0.35);
+/// Points uniformly distributed inside a ball (no connectivity).
+Mesh random_ball(std::size_t n, std::uint64_t seed, double radius = 1.0);
+/// Points uniformly distributed on a sphere surface (no connectivity).
+Mesh random_sphere_points(std::size_t n, std::uint64_t seed, double radius = 1.0);
+/// Integer lattice nx*ny*nz with spacing `h` (many cospherical points).
+Mesh lattice(int nx, int ny, int nz, double h = 1.0);
+/// Gaussian clusters: `clusters` centres, `per` points each.
+Mesh clustered(int clusters, int per, std::uint64_t seed);
+/// Random points on the plane z = 0.3x - 0.2y + 1.
+Mesh coplanar(std::size_t n, std::uint64_t seed);
+/// Random points on a line.
+Mesh collinear(std::size_t n, std::uint64_t seed);
+/// `n` copies of the same point.
+Mesh all_duplicates(std::size_t n);
+
+/// A fresh empty directory under the test build tree.
+std::string temp_dir(const std::string& name);
+
+}  // namespace hmc::testgen

@@ -1,0 +1,425 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Encoder/decoder round trips and error handling through the public API.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <set>
+
+#include "codec/format.hpp"
+#include "container/container.hpp"
+#include "hmc/codec.hpp"
+#include "support/generators.hpp"
+#include "util/bytes.hpp"
+
+using namespace hmc;
+using namespace hmc::detail;
+
+namespace {
+
+// The expected decoded set, computed here from the definition (bounding-box
+// origin, one step = largest extent / (2^q - 1), round to nearest) rather
+// than by the encoder's code.
+std::set<GridPoint> expected_set(const Mesh& m, int q) {
+  Vec3 lo = m.points[0], hi = m.points[0];
+  for (const auto& p : m.points)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  const double ext = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+  const double step = ext > 0 ? ext / static_cast<double>((1u << q) - 1) : 1.0;
+  std::set<GridPoint> s;
+  for (const auto& p : m.points) {
+    GridPoint g;
+    for (int a = 0; a < 3; ++a) {
+      const double t = std::round((p[a] - lo[a]) / step);
+      g[a] = static_cast<std::uint32_t>(std::min(std::max(t, 0.0), static_cast<double>((1u << q) - 1)));
+    }
+    s.insert(g);
+  }
+  return s;
+}
+
+Decoded decode_ok(const std::vector<std::uint8_t>& b, const DecodeOptions& o = {}) {
+  auto d = decode(b.data(), b.size(), o);
+  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  return std::move(d).value();
+}
+
+Status decode_status(const std::vector<std::uint8_t>& b, const DecodeOptions& o = {}) {
+  return decode(b.data(), b.size(), o).status();
+}
+
+void check_round_trip(const Mesh& m, int q) {
+  auto e = encode(m, EncodeOptions{q, std::nullopt, true});
+  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  const auto expect = expected_set(m, q);
+  auto d = decode_ok(e.value().bytes);
+  REQUIRE(d.levels.size() == 1);
+  CHECK_FALSE(d.truncated);
+  const auto& pts = d.finest().points;
+  CHECK(std::is_sorted(pts.begin(), pts.end()));
+  CHECK(std::adjacent_find(pts.begin(), pts.end()) == pts.end());
+  CHECK(std::set<GridPoint>(pts.begin(), pts.end()) == expect);
+  CHECK(e.value().report.distinct_points == expect.size());
+  CHECK(e.value().report.duplicates_merged == m.points.size() - expect.size());
+  CHECK(d.quantizer.bits == q);
+  // Dequantized points lie within half a step (per axis) of an input point.
+  for (std::size_t i = 0; i < m.points.size(); i += 1 + m.points.size() / 50) {
+    const auto& p = m.points[i];
+    double best = 1e300;
+    for (const auto& g : pts) {
+      auto v = d.quantizer.dequantize(g);
+      double worst_axis = std::max({std::abs(v[0] - p[0]), std::abs(v[1] - p[1]), std::abs(v[2] - p[2])});
+      best = std::min(best, worst_axis);
+    }
+    CHECK(best <= d.quantizer.step * 0.5000001 + 1e-12 * std::abs(p[0] + p[1] + p[2]));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("lossless round trip on generated sets at q = 1, 12 and 21") {
+  const std::vector<std::pair<const char*, Mesh>> inputs = {
+      {"sphere surface", testgen::uv_sphere(20, 30)},
+      {"torus", testgen::torus(40, 20)},
+      {"random ball", testgen::random_ball(3000, 1)},
+      {"lattice", testgen::lattice(9, 7, 5)},
+      {"clustered", testgen::clustered(6, 300, 2)},
+      {"coplanar", testgen::coplanar(800, 3)},
+      {"collinear", testgen::collinear(200, 4)},
+      {"one point", testgen::all_duplicates(1)},
+      {"two points", [] { Mesh m; m.points = {{0, 0, 0}, {1e-3, 2e-3, -5e-4}}; return m; }()},
+      {"all duplicates", testgen::all_duplicates(500)},
+  };
+  for (const auto& [name, mesh] : inputs)
+    for (int q : {1, 12, 21}) {
+      CAPTURE(name);
+      CAPTURE(q);
+      check_round_trip(mesh, q);
+    }
+}
+
+TEST_CASE("the stream codes the set: input order does not change a byte") {
+  Mesh m = testgen::random_ball(2000, 9);
+  auto a = encode(m).value().bytes;
+  testgen::Rng rng(3);
+  std::shuffle(m.points.begin(), m.points.end(), rng);
+  CHECK(encode(m).value().bytes == a);
+}
+
+TEST_CASE("duplicates before quantization are merged and counted") {
+  Mesh m = testgen::lattice(4, 4, 4);
+  const auto n = m.points.size();
+  for (std::size_t i = 0; i < n; ++i) m.points.push_back(m.points[i]);
+  auto e = encode(m).value();
+  CHECK(e.report.input_points == 2 * n);
+  CHECK(e.report.distinct_points == n);
+  CHECK(e.report.duplicates_merged == n);
+}
+
+TEST_CASE("kind is detected from the connectivity and can be overridden") {
+  CHECK(encode(testgen::torus(10, 8)).value().report.kind == Kind::surface);
+  CHECK(encode(testgen::random_ball(50, 1)).value().report.kind == Kind::points);
+  Mesh t = testgen::lattice(2, 2, 2);
+  t.tetrahedra.push_back({0, 1, 2, 4});
+  CHECK(encode(t).value().report.kind == Kind::volume);
+  EncodeOptions o;
+  o.kind = Kind::volume;
+  auto e = encode(testgen::random_ball(50, 1), o).value();
+  CHECK(decode_ok(e.bytes).kind == Kind::volume);
+}
+
+TEST_CASE("bad encoder input is refused with invalid_argument") {
+  CHECK(encode(Mesh{}).status() == Status::invalid_argument);
+  Mesh m = testgen::random_ball(10, 1);
+  m.points[3][1] = std::nan("");
+  auto r = encode(m);
+  CHECK(r.status() == Status::invalid_argument);
+  CHECK(r.error().message.find("point 3") != std::string::npos);
+  m.points[3][1] = INFINITY;
+  CHECK(encode(m).status() == Status::invalid_argument);
+  CHECK(encode(testgen::random_ball(10, 1), EncodeOptions{0, std::nullopt, true}).status() == Status::invalid_argument);
+  CHECK(encode(testgen::random_ball(10, 1), EncodeOptions{22, std::nullopt, true}).status() == Status::invalid_argument);
+  Mesh huge;
+  huge.points = {{-1e308, 0, 0}, {1e308, 0, 0}};
+  CHECK(encode(huge).status() == Status::invalid_argument);
+  Mesh badtri = testgen::torus(6, 6);
+  badtri.triangles.push_back({0, 1, 999});
+  CHECK(encode(badtri).status() == Status::invalid_argument);
+}
+
+TEST_CASE("tiny and enormous coordinate ranges quantize onto the full grid") {
+  for (double scale : {1e-200, 1e-9, 1.0, 1e9, 1e200}) {
+    Mesh m = testgen::random_ball(300, 5, scale);
+    CAPTURE(scale);
+    check_round_trip(m, 12);
+  }
+}
+
+TEST_CASE("a flipped byte anywhere is detected, never decoded into other points") {
+  auto b = encode(testgen::torus(30, 12)).value().bytes;
+  const auto original = decode_ok(b).finest().points;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    auto c = b;
+    c[i] ^= 0x04;
+    auto d = decode(c.data(), c.size());
+    CAPTURE(i);
+    if (i < 8) {
+      CHECK(d.status() == Status::bad_magic);
+    } else if (i == 8) {
+      CHECK(d.status() == Status::unsupported_version);
+    } else if (i == 9) {
+      // The minor version is informative: same points.
+      REQUIRE(d.ok());
+      CHECK(d.value().finest().points == original);
+    } else if (d.ok()) {
+      // Only a damaged length of the final, empty end chunk can leave every
+      // level intact; the decoder then warns that the end is missing.
+      CHECK(i >= b.size() - 8);
+      CHECK(d.value().finest().points == original);
+      CHECK_FALSE(d.value().warning.empty());
+    } else {
+      CHECK((d.status() == Status::crc_mismatch || d.status() == Status::bad_chunk ||
+             d.status() == Status::truncated) == true);
+      CHECK_FALSE(d.error().message.empty());
+    }
+  }
+}
+
+TEST_CASE("a CRC error names the chunk and offset") {
+  auto b = encode(testgen::torus(30, 12)).value().bytes;
+  b[b.size() - 20] ^= 1;  // inside the BASE payload
+  auto d = decode(b.data(), b.size());
+  REQUIRE(d.status() == Status::crc_mismatch);
+  CHECK(d.error().message.find("BASE") != std::string::npos);
+  CHECK(d.error().message.find("offset") != std::string::npos);
+}
+
+TEST_CASE("truncation: before the level is complete it is an error; after it, the level decodes") {
+  auto b = encode(testgen::torus(30, 12)).value().bytes;
+  auto view = parse_container(b.data(), b.size(), kEnd);
+  std::size_t base_end = 0;
+  for (const auto& c : view.chunks)
+    if (c.type == kBaseLayer) base_end = c.offset + kChunkOverhead + c.length;
+  REQUIRE(base_end > 0);
+  for (std::size_t n = 0; n < b.size(); ++n) {
+    std::vector<std::uint8_t> c(b.begin(), b.begin() + static_cast<long>(n));
+    auto d = decode(c.data(), c.size());
+    CAPTURE(n);
+    if (n < base_end) {
+      REQUIRE(d.status() == Status::truncated);
+      CHECK_FALSE(d.error().message.empty());
+    } else {
+      // Every declared level is complete; only the end chunk is missing.
+      REQUIRE(d.ok());
+      CHECK_FALSE(d.value().truncated);
+      CHECK(d.value().levels.size() == 1);
+      CHECK_FALSE(d.value().warning.empty());
+    }
+  }
+}
+
+namespace {
+
+// Hand-made streams: a valid skeleton whose chunks a test can replace.
+struct Chunks {
+  std::vector<std::pair<ChunkType, std::vector<std::uint8_t>>> list;
+  std::vector<std::uint8_t> bytes() const {
+    ContainerWriter w;
+    for (const auto& [t, p] : list) w.chunk(t, p);
+    return w.finish();
+  }
+};
+
+Chunks skeleton() {
+  auto b = encode(testgen::random_ball(100, 4)).value().bytes;
+  auto v = parse_container(b.data(), b.size(), kEnd);
+  Chunks c;
+  for (const auto& ch : v.chunks) c.list.emplace_back(ch.type, std::vector<std::uint8_t>(ch.payload, ch.payload + ch.length));
+  return c;
+}
+
+std::size_t index_of(const Chunks& c, const ChunkType& t) {
+  for (std::size_t i = 0; i < c.list.size(); ++i)
+    if (c.list[i].first == t) return i;
+  FAIL("chunk not found");
+  return 0;
+}
+
+}  // namespace
+
+TEST_CASE("hand-made malformed streams get their error class") {
+  const Chunks base = skeleton();
+  REQUIRE(decode_status(base.bytes()) == Status::ok);
+
+  SUBCASE("q outside 1..21") {
+    for (int q : {0, 22, 255}) {
+      Chunks c = base;
+      c.list[index_of(c, kScalarQuantizer)].second[0] = static_cast<std::uint8_t>(q);
+      CHECK(decode_status(c.bytes()) == Status::bad_header);
+    }
+  }
+  SUBCASE("non-positive or non-finite step, non-finite origin") {
+    for (double step : {0.0, -1.0, static_cast<double>(INFINITY), static_cast<double>(NAN)}) {
+      Chunks c = base;
+      ScalarQuantizer q;
+      q.step = step;
+      c.list[index_of(c, kScalarQuantizer)].second = write_scalar_quantizer(q);
+      CHECK(decode_status(c.bytes()) == Status::bad_header);
+    }
+    Chunks c = base;
+    ScalarQuantizer q;
+    q.origin[1] = NAN;
+    c.list[index_of(c, kScalarQuantizer)].second = write_scalar_quantizer(q);
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+  }
+  SUBCASE("reserved header flags, unknown kind, trailing header bytes") {
+    Chunks c = base;
+    c.list[0].second[1] = 1;
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+    c = base;
+    c.list[0].second[0] = 3;
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+    c = base;
+    c.list[0].second.push_back(0);
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+  }
+  SUBCASE("point counts: zero levels, zero points, over the grid, over the limit") {
+    auto head = [](std::vector<std::uint64_t> counts, std::uint64_t levels) {
+      ByteWriter w;
+      w.u8(0), w.u8(0), w.varint(levels);
+      for (auto n : counts) w.varint(n);
+      return w.data();
+    };
+    Chunks c = base;
+    c.list[0].second = head({}, 0);
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+    c.list[0].second = head({0}, 1);
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+    c.list[0].second = head({5, 3}, 2);
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+    c.list[0].second = head({1000000000}, 1);
+    CHECK(decode_status(c.bytes()) == Status::limit_exceeded);
+    // Raising the limit: the stream is still refused, without allocating a
+    // billion points (the octree runs out of bits or does not match).
+    DecodeOptions big;
+    big.limits.max_points = 1ull << 40;
+    CHECK(decode_status(c.bytes(), big) == Status::bad_layer);
+    ScalarQuantizer q1;
+    q1.bits = 1;
+    c.list[index_of(c, kScalarQuantizer)].second = write_scalar_quantizer(q1);
+    c.list[0].second = head({9}, 1);
+    CHECK(decode_status(c.bytes()) == Status::bad_header);  // a 2^1 grid holds 8 points
+    DecodeOptions few;
+    few.limits.max_levels = 1;
+    c = base;
+    c.list[0].second = head({10, 100}, 2);
+    CHECK(decode_status(c.bytes(), few) == Status::limit_exceeded);
+  }
+  SUBCASE("chunk order and count") {
+    Chunks c = base;
+    std::swap(c.list[0], c.list[1]);
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);  // HEAD not first
+    c = base;
+    c.list.erase(c.list.begin() + static_cast<long>(index_of(c, kScalarQuantizer)));
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);  // BASE without SQNT
+    c = base;
+    c.list.insert(c.list.begin() + static_cast<long>(index_of(c, kBaseLayer)), c.list[index_of(c, kBaseLayer)]);
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);  // two BASE
+    c = base;
+    c.list.insert(c.list.begin() + 1, c.list[0]);
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);  // two HEAD
+    c = base;
+    c.list.erase(c.list.begin() + static_cast<long>(index_of(c, kBaseLayer)));
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);  // HEND before the level
+    c = base;
+    c.list.back().second.push_back(0);
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);  // HEND with payload
+  }
+  SUBCASE("unknown chunks: critical is an error, ancillary is skipped") {
+    Chunks c = base;
+    c.list.insert(c.list.begin() + 2, {chunk_type("ZZZZ"), {1, 2}});
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);
+    c = base;
+    c.list.insert(c.list.begin() + 2, {chunk_type("zzzz"), {1, 2}});
+    c.list.insert(c.list.end() - 1, {chunk_type("tIME"), {}});
+    auto d = decode_ok(c.bytes());
+    CHECK(d.finest().points == decode_ok(base.bytes()).finest().points);
+  }
+  SUBCASE("vector-quantizer table: parsed and validated") {
+    VectorQuantizer vq;
+    vq.codebook = {{1, -2, 3}, {0, 0, 0}, {2097151, -2097151, 7}};
+    Chunks c = base;
+    c.list.insert(c.list.begin() + static_cast<long>(index_of(c, kBaseLayer)), {kVectorQuantizer, write_vector_quantizer(vq)});
+    auto d = decode_ok(c.bytes());
+    REQUIRE(d.vector_quantizer.has_value());
+    CHECK(d.vector_quantizer->codebook == vq.codebook);
+    auto bad = vq;
+    bad.codebook[0][0] = 2097152;
+    c.list[index_of(c, kVectorQuantizer)].second = write_vector_quantizer(bad);
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+    ByteWriter w;
+    w.u8(3), w.varint(65536);
+    c.list[index_of(c, kVectorQuantizer)].second = w.data();  // declares more than it holds
+    CHECK(decode_status(c.bytes()) == Status::bad_header);
+    c.list[index_of(c, kVectorQuantizer)].second = {2, 1, 0, 0};
+    CHECK(decode_status(c.bytes()) == Status::bad_header);  // dimension 2
+  }
+  SUBCASE("base layer: unknown coder, empty, extra bytes, short") {
+    Chunks c = base;
+    auto& p = c.list[index_of(c, kBaseLayer)].second;
+    p[0] = 9;
+    CHECK(decode_status(c.bytes()) == Status::bad_layer);
+    p.clear();
+    CHECK(decode_status(c.bytes()) == Status::bad_layer);
+    c = base;
+    c.list[index_of(c, kBaseLayer)].second.push_back(0);
+    CHECK(decode_status(c.bytes()) == Status::bad_layer);
+    c = base;
+    c.list[index_of(c, kBaseLayer)].second.resize(c.list[index_of(c, kBaseLayer)].second.size() / 2);
+    CHECK(decode_status(c.bytes()) != Status::ok);
+  }
+  SUBCASE("a declared count that disagrees with the octree") {
+    Chunks c = base;
+    ByteWriter w;
+    w.u8(0), w.u8(0), w.varint(1), w.varint(99);
+    c.list[0].second = w.data();
+    CHECK(decode_status(c.bytes()) == Status::bad_layer);
+  }
+}
+
+TEST_CASE("limits: stream size") {
+  auto b = encode(testgen::random_ball(100, 4)).value().bytes;
+  DecodeOptions o;
+  o.limits.max_bytes = b.size() - 1;
+  CHECK(decode_status(b, o) == Status::limit_exceeded);
+}
+
+TEST_CASE("inspect lists chunks and levels without decoding layers") {
+  auto e = encode(testgen::torus(30, 12)).value();
+  auto i = inspect(e.bytes.data(), e.bytes.size());
+  REQUIRE(i.ok());
+  const auto& s = i.value();
+  REQUIRE(s.chunks.size() == 5);
+  CHECK(s.chunks[0].type == "HEAD");
+  CHECK(s.chunks[2].type == "info");
+  CHECK_FALSE(s.chunks[2].critical);
+  CHECK(s.chunks.back().type == "HEND");
+  REQUIRE(s.levels.size() == 1);
+  CHECK(s.levels[0].points == e.report.distinct_points);
+  CHECK(s.levels[0].stream_bytes == e.report.levels[0].stream_bytes);
+  CHECK(s.total_bytes == e.bytes.size());
+  CHECK_FALSE(s.truncated);
+}
+
+TEST_CASE("the info chunk carries encoder statistics and can be omitted") {
+  Mesh m = testgen::all_duplicates(7);
+  auto d = decode_ok(encode(m).value().bytes);
+  bool found = false;
+  for (const auto& [k, v] : d.info)
+    if (k == "duplicates_merged") found = (v == "6");
+  CHECK(found);
+  EncodeOptions o;
+  o.write_info = false;
+  CHECK(decode_ok(encode(m, o).value().bytes).info.empty());
+}

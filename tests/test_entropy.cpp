@@ -1,0 +1,167 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Bit I/O and canonical Huffman codes.
+#include <doctest/doctest.h>
+
+#include <functional>
+#include <random>
+
+#include "entropy/huffman.hpp"
+
+using namespace hmc;
+using namespace hmc::detail;
+
+namespace {
+
+Status status_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const StreamError& e) {
+    return e.error().status;
+  }
+  return Status::ok;
+}
+
+std::uint64_t kraft_sum(const std::vector<std::uint8_t>& len) {
+  std::uint64_t k = 0;
+  for (auto l : len)
+    if (l) k += std::uint64_t{1} << (15 - l);
+  return k;
+}
+
+}  // namespace
+
+TEST_CASE("bits are packed most significant first and padded with zeros") {
+  BitWriter w;
+  w.put(1, 1);
+  w.put(0, 1);
+  w.put(0x5, 3);  // 101
+  auto bytes = w.finish();
+  REQUIRE(bytes.size() == 1);
+  CHECK(bytes[0] == 0xA8);  // 1 0 101 000
+  BitReader r(bytes.data(), bytes.size(), "t");
+  CHECK(r.get(2) == 2);
+  CHECK(r.get(3) == 5);
+  r.expect_end();
+}
+
+TEST_CASE("reading past the end of a bit stream is bad_layer") {
+  std::uint8_t b = 0xff;
+  BitReader r(&b, 1, "t");
+  CHECK(r.get(8) == 0xff);
+  CHECK(status_of([&] { r.get(1); }) == Status::bad_layer);
+}
+
+TEST_CASE("non-zero padding and trailing bytes are rejected") {
+  std::uint8_t b[2] = {0x81, 0x00};
+  BitReader r(b, 1, "t");
+  r.get(1);
+  CHECK(status_of([&] { r.expect_end(); }) == Status::bad_layer);
+  BitReader r2(b, 2, "t");
+  r2.get(8);
+  CHECK(status_of([&] { r2.expect_end(); }) == Status::bad_layer);
+}
+
+TEST_CASE("exp-Golomb codes round trip") {
+  BitWriter w;
+  const std::vector<std::uint32_t> vals{0, 1, 2, 3, 7, 8, 255, 256, 65535, 1u << 20, 0x7ffffffe};
+  for (auto v : vals) w.exp_golomb(v);
+  auto bytes = w.finish();
+  BitReader r(bytes.data(), bytes.size(), "t");
+  for (auto v : vals) CHECK(r.exp_golomb() == v);
+}
+
+TEST_CASE("Huffman lengths are optimal on a textbook example") {
+  // Frequencies 45 13 12 16 9 5: optimal lengths 1 3 3 3 4 4 (cost 224).
+  auto len = huffman_lengths({45, 13, 12, 16, 9, 5});
+  CHECK(len == std::vector<std::uint8_t>{1, 3, 3, 3, 4, 4});
+  CHECK(kraft_sum(len) == (1u << 15));
+}
+
+TEST_CASE("Huffman lengths respect the 15-bit limit and stay complete") {
+  // Fibonacci frequencies force a depth of n-1 without a limit.
+  std::vector<std::uint64_t> f{1, 1};
+  while (f.size() < 30) f.push_back(f[f.size() - 1] + f[f.size() - 2]);
+  auto len = huffman_lengths(f);
+  for (auto l : len) {
+    CHECK(l >= 1);
+    CHECK(l <= 15);
+  }
+  CHECK(kraft_sum(len) == (1u << 15));
+}
+
+TEST_CASE("a single used symbol costs no bits") {
+  std::vector<std::uint64_t> f(256, 0);
+  f[77] = 1000;
+  auto code = HuffmanCode::from_frequencies(f);
+  BitWriter w;
+  code.write(w);
+  const auto table_bits = w.bit_count();
+  for (int i = 0; i < 1000; ++i) code.encode(w, 77);
+  CHECK(w.bit_count() == table_bits);
+  auto bytes = w.finish();
+  BitReader r(bytes.data(), bytes.size(), "t");
+  auto back = HuffmanCode::read(r, 256, "t");
+  for (int i = 0; i < 1000; ++i) CHECK(back.decode(r) == 77);
+}
+
+TEST_CASE("Huffman tables and symbols round trip for many distributions") {
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::uint32_t alphabet = 2 + static_cast<std::uint32_t>(rng() % 300);
+    std::vector<std::uint64_t> freq(alphabet, 0);
+    std::vector<std::uint32_t> msg;
+    const int used = 2 + static_cast<int>(rng() % std::min<std::uint32_t>(alphabet - 1, 40));
+    std::geometric_distribution<int> geo(0.2 + 0.7 * (trial % 5) / 5.0);
+    for (int i = 0; i < 2000; ++i) {
+      std::uint32_t s = static_cast<std::uint32_t>(geo(rng) % used) * (alphabet / used);
+      msg.push_back(s);
+      ++freq[s];
+    }
+    auto code = HuffmanCode::from_frequencies(freq);
+    BitWriter w;
+    code.write(w);
+    for (auto s : msg) code.encode(w, s);
+    auto bytes = w.finish();
+    BitReader r(bytes.data(), bytes.size(), "t");
+    auto back = HuffmanCode::read(r, alphabet, "t");
+    for (std::uint32_t s = 0; s < alphabet; ++s) REQUIRE(back.length(s) == code.length(s));
+    for (auto s : msg) REQUIRE(back.decode(r) == s);
+    r.expect_end();
+  }
+}
+
+TEST_CASE("invalid code-length tables are bad_huffman_table") {
+  auto table = [](const std::function<void(BitWriter&)>& f, std::uint32_t alphabet) {
+    BitWriter w;
+    f(w);
+    auto bytes = w.finish();
+    bytes.resize(bytes.size() + 8, 0);
+    return status_of([&] {
+      BitReader r(bytes.data(), bytes.size(), "t");
+      HuffmanCode::read(r, alphabet, "t");
+    });
+  };
+  // Over-subscribed: three symbols of length 1.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); for (int i = 0; i < 3; ++i) w.put(1, 4); }, 3) == Status::bad_huffman_table);
+  // Incomplete: lengths 1, 2.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(1, 4); w.put(2, 4); }, 2) == Status::bad_huffman_table);
+  // One symbol only in the explicit form.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(1, 4); w.put(0, 4); w.exp_golomb(0); }, 2) == Status::bad_huffman_table);
+  // A zero run past the end of the alphabet.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(1, 4); w.put(1, 4); w.put(0, 4); w.exp_golomb(5); }, 4) == Status::bad_huffman_table);
+  // Single-symbol form naming a symbol outside the alphabet (alphabet 5 -> 3 bits).
+  CHECK(table([](BitWriter& w) { w.put(1, 1); w.put(6, 3); }, 5) == Status::bad_huffman_table);
+  // A valid table for contrast: lengths 1, 2, 2.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(1, 4); w.put(2, 4); w.put(2, 4); }, 3) == Status::ok);
+}
+
+TEST_CASE("canonical codes are assigned by (length, symbol)") {
+  // Lengths 2 1 3 3 -> symbol 1: 0, symbol 0: 10, symbol 2: 110, symbol 3: 111.
+  auto code = HuffmanCode::from_lengths({2, 1, 3, 3}, "t");
+  BitWriter w;
+  for (std::uint32_t s : {1u, 0u, 2u, 3u}) code.encode(w, s);
+  auto bytes = w.finish();
+  REQUIRE(bytes.size() == 2);
+  CHECK(bytes[0] == 0x5B);  // 0 10 110 11|1
+  CHECK(bytes[1] == 0x80);
+}

@@ -1,0 +1,92 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Shared pieces of the hmc command line: argument parsing, exit codes,
+// JSON output, and mapping library errors to exit codes and messages.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hmc/codec.hpp"
+#include "hmc/status.hpp"
+
+namespace hmc::cli {
+
+/// Exit codes (documented in README and `hmc help`).
+enum Exit : int {
+  kOk = 0,
+  kUsage = 1,        // bad command line
+  kInput = 2,        // input file unreadable, malformed or unsuitable
+  kStream = 3,       // invalid or corrupt HMC stream
+  kOutput = 4,       // output could not be written
+  kLimit = 5,        // a decoder limit was exceeded
+  kMemory = 6,       // out of memory
+  kInternal = 70,    // bug
+};
+
+/// Exit code for a failed operation on input (`reading`) or output.
+int exit_code(const Error& e, bool reading_stream);
+
+/// Print "hmc: <what>: <error>" to stderr and return the exit code.
+int report(const std::string& what, const Error& e, bool reading_stream = false);
+
+/// Minimal argument parser: positional arguments, --flag and --opt VALUE
+/// (also --opt=VALUE). Options are declared up front so typos are errors.
+class Args {
+ public:
+  Args(int argc, char** argv, int first, const std::vector<std::string>& flags,
+       const std::vector<std::string>& options);
+  bool ok() const { return error_.empty(); }
+  const std::string& error() const { return error_; }
+  bool flag(const std::string& name) const { return flags_.count(name) != 0; }
+  bool has(const std::string& name) const { return values_.count(name) != 0; }
+  std::string get(const std::string& name, const std::string& def = {}) const;
+  /// Integer option within [lo, hi]; sets error() on failure.
+  long long get_int(const std::string& name, long long def, long long lo, long long hi);
+  const std::vector<std::string>& positional() const { return positional_; }
+
+ private:
+  std::map<std::string, std::string> values_;
+  std::map<std::string, bool> flags_;
+  std::vector<std::string> positional_;
+  std::string error_;
+};
+
+/// A tiny JSON writer producing one object, keys in insertion order.
+class Json {
+ public:
+  Json& key(const std::string& k);
+  Json& value(const std::string& s);
+  Json& value(const char* s) { return value(std::string(s)); }
+  Json& value(double d);
+  Json& value(std::uint64_t u);
+  Json& value(std::int64_t i);
+  Json& value(int i) { return value(static_cast<std::int64_t>(i)); }
+  Json& value(bool b);
+  Json& begin_object();
+  Json& end_object();
+  Json& begin_array();
+  Json& end_array();
+  std::string str() const { return out_ + "\n"; }
+
+ private:
+  void sep();
+  std::string out_;
+  std::vector<bool> first_{true};
+  bool after_key_ = false;
+};
+
+std::string json_escape(const std::string& s);
+
+/// Canonical dump (spec "Canonical dump"): header.json and level-K.points.
+/// Written atomically: into a fresh directory renamed into place, or file by
+/// file into an existing directory, removing what was written on failure.
+Result<Done> write_canonical_dump(const std::string& dir, Kind kind, const ScalarQuantizer& q,
+                                  const std::vector<std::uint64_t>& declared_points,
+                                  const std::vector<std::pair<int, const std::vector<GridPoint>*>>& levels);
+
+/// Format a double as C printf "%.17g".
+std::string g17(double v);
+
+}  // namespace hmc::cli

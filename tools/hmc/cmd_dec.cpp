@@ -1,0 +1,101 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "cli.hpp"
+#include "hmc/codec.hpp"
+#include "hmc/meshio.hpp"
+
+namespace hmc::cli {
+
+namespace {
+
+Mesh level_mesh(const Decoded& d, const DecodedLevel& level) {
+  Mesh m;
+  m.points.reserve(level.points.size());
+  for (const auto& p : level.points) m.points.push_back(d.quantizer.dequantize(p));
+  return m;
+}
+
+}  // namespace
+
+int cmd_dec(int argc, char** argv) {
+  Args a(argc, argv, 2, {"--json"},
+         {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels"});
+  DecodeOptions opt;
+  opt.finest_level = static_cast<int>(a.get_int("--level", 0, 0, 63));
+  opt.limits.max_points = static_cast<std::uint64_t>(
+      a.get_int("--max-points", static_cast<long long>(opt.limits.max_points), 1, 1ll << 40));
+  opt.limits.max_levels = static_cast<std::uint32_t>(a.get_int("--max-levels", 64, 1, 64));
+  const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
+  if (!a.ok() || a.positional().size() != 1) {
+    std::fprintf(stderr, "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR] [--canonical DIR] [--json]\n",
+                 a.ok() ? "need one input stream" : a.error().c_str());
+    return kUsage;
+  }
+  const std::string in = a.positional()[0];
+  const auto t0 = std::chrono::steady_clock::now();
+  auto bytes = io::read_file(in, opt.limits.max_bytes);
+  if (!bytes) return report("cannot read " + in, bytes.error(), true);
+  const auto& b = bytes.value();
+  auto dec = decode(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), opt);
+  if (!dec) return report(in, dec.error(), true);
+  const auto t1 = std::chrono::steady_clock::now();
+  const Decoded& d = dec.value();
+  if (d.truncated) std::fprintf(stderr, "hmc: warning: %s: %s\n", in.c_str(), d.warning.c_str());
+  if (opt.finest_level > 0 && d.finest().lod > opt.finest_level)
+    std::fprintf(stderr, "hmc: warning: %s: level %d is not in the stream; the finest decoded level is %d\n", in.c_str(),
+                 opt.finest_level, d.finest().lod);
+
+  if (!out.empty()) {
+    auto w = io::write_mesh(out, level_mesh(d, d.finest()));
+    if (!w) return report("cannot write " + out, w.error());
+  }
+  if (a.has("--all-levels")) {
+    const std::string dir = a.get("--all-levels");
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) return report("cannot create " + dir, Error{Status::io_error, ec.message()});
+    const std::string ext = a.get("--ext", "ply");
+    for (const auto& level : d.levels) {
+      const std::string path = (std::filesystem::path(dir) / ("level-" + std::to_string(level.lod) + "." + ext)).string();
+      auto w = io::write_mesh(path, level_mesh(d, level));
+      if (!w) return report("cannot write " + path, w.error());
+    }
+  }
+  if (a.has("--canonical")) {
+    std::vector<std::pair<int, const std::vector<GridPoint>*>> levels;
+    for (const auto& l : d.levels) levels.emplace_back(l.lod, &l.points);
+    auto w = write_canonical_dump(a.get("--canonical"), d.kind, d.quantizer, d.declared_points, levels);
+    if (!w) return report("cannot write the canonical dump", w.error());
+  }
+  const double secs = std::chrono::duration<double>(t1 - t0).count();
+  if (a.flag("--json")) {
+    Json j;
+    j.begin_object();
+    j.key("input").value(in).key("kind").value(kind_name(d.kind)).key("q").value(d.quantizer.bits);
+    j.key("levels_declared").value(d.level_count()).key("truncated").value(d.truncated);
+    if (d.truncated) j.key("warning").value(d.warning);
+    j.key("decode_seconds").value(secs);
+    j.key("levels").begin_array();
+    for (const auto& l : d.levels) {
+      j.begin_object();
+      j.key("level").value(l.lod).key("points").value(static_cast<std::uint64_t>(l.points.size()));
+      j.key("stream_bytes").value(l.stream_bytes);
+      j.end_object();
+    }
+    j.end_array().end_object();
+    std::fputs(j.str().c_str(), stdout);
+  } else {
+    std::printf("%s: %s, q = %d, %d level(s) declared, %zu decoded in %.3f s\n", in.c_str(), kind_name(d.kind),
+                d.quantizer.bits, d.level_count(), d.levels.size(), secs);
+    std::printf("%6s %10s %12s\n", "level", "points", "stream bytes");
+    for (const auto& l : d.levels)
+      std::printf("%6d %10zu %12llu\n", l.lod, l.points.size(), static_cast<unsigned long long>(l.stream_bytes));
+  }
+  return kOk;
+}
+
+}  // namespace hmc::cli

@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <chrono>
+#include <cstdio>
+#include <optional>
+#include <string>
+
+#include "cli.hpp"
+#include "hmc/codec.hpp"
+#include "hmc/meshio.hpp"
+
+namespace hmc::cli {
+
+namespace {
+
+std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
+  ok = true;
+  if (s.empty() || s == "auto") return std::nullopt;
+  if (s == "points") return Kind::points;
+  if (s == "surface") return Kind::surface;
+  if (s == "volume") return Kind::volume;
+  ok = false;
+  return std::nullopt;
+}
+
+}  // namespace
+
+int cmd_enc(int argc, char** argv) {
+  Args a(argc, argv, 2, {"--json", "--no-info"}, {"-o", "--output", "--bits", "--kind", "--canonical", "--format"});
+  EncodeOptions opt;
+  opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
+  bool kind_ok = true;
+  opt.kind = parse_kind(a.get("--kind"), kind_ok);
+  if (!kind_ok) {
+    std::fprintf(stderr, "hmc enc: --kind must be points, surface, volume or auto\n");
+    return kUsage;
+  }
+  opt.write_info = !a.flag("--no-info");
+  const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
+  if (!a.ok() || a.positional().size() != 1 || (out.empty() && !a.has("--canonical"))) {
+    std::fprintf(stderr, "hmc enc: %s\nusage: hmc enc IN -o OUT.hmc [--bits Q] [--kind K] [--canonical DIR] [--json]\n",
+                 a.ok() ? "need one input file and -o OUT.hmc" : a.error().c_str());
+    return kUsage;
+  }
+  const std::string in = a.positional()[0];
+  io::Format in_format = io::Format::automatic;
+  if (a.has("--format")) {
+    in_format = io::format_from_path("x." + a.get("--format"));
+    if (in_format == io::Format::automatic) {
+      std::fprintf(stderr, "hmc enc: unknown --format '%s'\n", a.get("--format").c_str());
+      return kUsage;
+    }
+  }
+
+  const auto t0 = std::chrono::steady_clock::now();
+  auto mesh = io::read_mesh(in, in_format);
+  if (!mesh) return report("cannot read " + in, mesh.error(), true);
+  const auto t1 = std::chrono::steady_clock::now();
+  auto enc = encode(mesh.value(), opt);
+  if (!enc) return report("cannot encode " + in, enc.error(), true);
+  const auto t2 = std::chrono::steady_clock::now();
+  const Encoded& e = enc.value();
+  if (!out.empty()) {
+    auto w = io::write_file_atomic(out, std::string_view(reinterpret_cast<const char*>(e.bytes.data()), e.bytes.size()), in);
+    if (!w) return report("cannot write " + out, w.error());
+  }
+  if (a.has("--canonical")) {
+    std::vector<std::uint64_t> declared;
+    for (const auto& l : e.report.levels) declared.push_back(l.points);
+    auto w = write_canonical_dump(a.get("--canonical"), e.report.kind, e.report.quantizer, declared, {{0, &e.points}});
+    if (!w) return report("cannot write the canonical dump", w.error());
+  }
+  const double read_s = std::chrono::duration<double>(t1 - t0).count();
+  const double enc_s = std::chrono::duration<double>(t2 - t1).count();
+  const EncodeReport& r = e.report;
+  const double bpp = r.distinct_points ? 8.0 * static_cast<double>(r.total_bytes) / static_cast<double>(r.distinct_points) : 0;
+  if (a.flag("--json")) {
+    Json j;
+    j.begin_object();
+    j.key("input").value(in).key("output").value(out);
+    j.key("kind").value(kind_name(r.kind)).key("q").value(r.quantizer.bits);
+    j.key("input_points").value(r.input_points).key("distinct_points").value(r.distinct_points);
+    j.key("duplicates_merged").value(r.duplicates_merged);
+    j.key("bytes").value(r.total_bytes).key("bits_per_point").value(bpp);
+    j.key("read_seconds").value(read_s).key("encode_seconds").value(enc_s);
+    j.key("levels").begin_array();
+    for (const auto& l : r.levels) {
+      j.begin_object();
+      j.key("level").value(l.lod).key("points").value(l.points).key("new_points").value(l.new_points);
+      j.key("layer_bytes").value(l.layer_bytes).key("stream_bytes").value(l.stream_bytes);
+      j.end_object();
+    }
+    j.end_array().end_object();
+    std::fputs(j.str().c_str(), stdout);
+  } else {
+    std::printf("%s: %s, %llu points (%llu duplicates merged after quantization), q = %d\n", in.c_str(),
+                kind_name(r.kind), static_cast<unsigned long long>(r.distinct_points),
+                static_cast<unsigned long long>(r.duplicates_merged), r.quantizer.bits);
+    std::printf("%6s %10s %10s %12s %12s\n", "level", "points", "new", "layer bytes", "bits/point");
+    for (const auto& l : r.levels)
+      std::printf("%6d %10llu %10llu %12llu %12.3f\n", l.lod, static_cast<unsigned long long>(l.points),
+                  static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
+                  8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points));
+    std::printf("%s: %llu bytes, %.3f bits per point (read %.3f s, encode %.3f s)\n", out.empty() ? "(no output)" : out.c_str(),
+                static_cast<unsigned long long>(r.total_bytes), bpp, read_s, enc_s);
+  }
+  return kOk;
+}
+
+}  // namespace hmc::cli

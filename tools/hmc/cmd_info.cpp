@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include <cstdio>
+#include <string>
+
+#include "cli.hpp"
+#include "hmc/codec.hpp"
+#include "hmc/meshio.hpp"
+
+namespace hmc::cli {
+
+int cmd_info(int argc, char** argv) {
+  Args a(argc, argv, 2, {"--json"}, {});
+  if (!a.ok() || a.positional().size() != 1) {
+    std::fprintf(stderr, "hmc info: %s\nusage: hmc info IN.hmc [--json]\n", a.ok() ? "need one input stream" : a.error().c_str());
+    return kUsage;
+  }
+  const std::string in = a.positional()[0];
+  DecodeLimits limits;
+  auto bytes = io::read_file(in, limits.max_bytes);
+  if (!bytes) return report("cannot read " + in, bytes.error(), true);
+  const auto& b = bytes.value();
+  auto res = inspect(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), limits);
+  if (!res) return report(in, res.error(), true);
+  const StreamInfo& s = res.value();
+  if (a.flag("--json")) {
+    Json j;
+    j.begin_object();
+    j.key("input").value(in);
+    j.key("version").value(std::to_string(s.version_major) + "." + std::to_string(s.version_minor));
+    j.key("kind").value(kind_name(s.kind)).key("q").value(s.quantizer.bits);
+    j.key("origin").begin_array().value(s.quantizer.origin[0]).value(s.quantizer.origin[1]).value(s.quantizer.origin[2]).end_array();
+    j.key("step").value(s.quantizer.step);
+    j.key("bytes").value(s.total_bytes).key("truncated").value(s.truncated);
+    if (s.truncated) j.key("warning").value(s.warning);
+    j.key("chunks").begin_array();
+    for (const auto& c : s.chunks) {
+      j.begin_object();
+      j.key("type").value(c.type).key("offset").value(c.offset).key("length").value(static_cast<std::uint64_t>(c.length));
+      j.key("critical").value(c.critical).key("known").value(c.known);
+      j.end_object();
+    }
+    j.end_array();
+    j.key("levels").begin_array();
+    for (const auto& l : s.levels) {
+      j.begin_object();
+      j.key("level").value(l.lod).key("points").value(l.points).key("new_points").value(l.new_points);
+      j.key("layer_bytes").value(l.layer_bytes).key("stream_bytes").value(l.stream_bytes);
+      j.end_object();
+    }
+    j.end_array().end_object();
+    std::fputs(j.str().c_str(), stdout);
+    return kOk;
+  }
+  std::printf("%s: HMC %d.%d, %s, q = %d, origin (%s, %s, %s), step %s, %llu bytes\n", in.c_str(), s.version_major,
+              s.version_minor, kind_name(s.kind), s.quantizer.bits, g17(s.quantizer.origin[0]).c_str(),
+              g17(s.quantizer.origin[1]).c_str(), g17(s.quantizer.origin[2]).c_str(), g17(s.quantizer.step).c_str(),
+              static_cast<unsigned long long>(s.total_bytes));
+  std::printf("\nchunks:\n%6s %10s %10s  %s\n", "type", "offset", "length", "");
+  for (const auto& c : s.chunks)
+    std::printf("%6s %10llu %10u  %s%s\n", c.type.c_str(), static_cast<unsigned long long>(c.offset), c.length,
+                c.critical ? "critical" : "ancillary", c.known ? "" : ", unknown (skipped)");
+  std::printf("\nlevels (coarsest first):\n%6s %10s %10s %12s %12s %12s\n", "level", "points", "new", "layer bytes",
+              "prefix bytes", "bits/point");
+  for (const auto& l : s.levels)
+    std::printf("%6d %10llu %10llu %12llu %12llu %12.3f\n", l.lod, static_cast<unsigned long long>(l.points),
+                static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
+                static_cast<unsigned long long>(l.stream_bytes),
+                8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points));
+  if (s.truncated) std::printf("\nwarning: %s\n", s.warning.c_str());
+  return kOk;
+}
+
+}  // namespace hmc::cli

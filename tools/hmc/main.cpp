@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// hmc — the command line of the HMC codec. See `hmc help`.
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "cli.hpp"
+#include "hmc/codec.hpp"
+#include "hmc/meshio.hpp"
+
+namespace hmc::cli {
+int cmd_enc(int argc, char** argv);
+int cmd_dec(int argc, char** argv);
+int cmd_info(int argc, char** argv);
+}  // namespace hmc::cli
+
+namespace {
+
+const char* kUsage =
+    "usage: hmc <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  enc IN -o OUT.hmc   encode a mesh or point file (PLY, OBJ, OFF, XYZ, STL, TetGen .node/.ele,\n"
+    "                      MEDIT .mesh, Gmsh .msh, VTK) into an HMC stream\n"
+    "      --bits Q            quantization bits per axis, 1..21 (default 12)\n"
+    "      --kind K            points | surface | volume (default: detected from the input)\n"
+    "      --canonical DIR     also write the canonical dump of the quantized input\n"
+    "      --no-info           omit the ancillary info chunk\n"
+    "      --json              print the report as JSON\n"
+    "  dec IN.hmc -o OUT   decode the finest level (or --level K) to PLY, OBJ, XYZ, VTK, VTU, ...\n"
+    "      --level K           stop at level K (0 = finest)\n"
+    "      --all-levels DIR    write every decoded level to DIR/level-K.<ext> (--ext, default ply)\n"
+    "      --canonical DIR     write the canonical dump (header.json, level-K.points)\n"
+    "      --max-points N      refuse streams with more points (default 67108864)\n"
+    "      --json              print a summary as JSON\n"
+    "  info IN.hmc         list chunks and levels [--json]\n"
+    "  version             print the library version\n"
+    "\n"
+    "exit codes: 0 ok, 1 usage, 2 input file error, 3 invalid or corrupt stream,\n"
+    "            4 output error, 5 decoder limit exceeded, 6 out of memory, 70 internal error\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fputs(kUsage, stderr);
+    return hmc::cli::kUsage;
+  }
+  const std::string cmd = argv[1];
+  if (cmd == "enc") return hmc::cli::cmd_enc(argc, argv);
+  if (cmd == "dec") return hmc::cli::cmd_dec(argc, argv);
+  if (cmd == "info") return hmc::cli::cmd_info(argc, argv);
+  if (cmd == "version" || cmd == "--version") {
+    std::printf("hmc %s\n", hmc::version_string());
+    return 0;
+  }
+  if (cmd == "help" || cmd == "--help" || cmd == "-h") {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
+  std::fprintf(stderr, "hmc: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
+  return hmc::cli::kUsage;
+}
