@@ -10,7 +10,8 @@
 #include "codec/format.hpp"
 #include "container/container.hpp"
 #include "hmc/codec.hpp"
-#include "support/generators.hpp"
+#include "samples.hpp"
+#include "support/temp_dir.hpp"
 #include "util/bytes.hpp"
 
 using namespace hmc;
@@ -80,16 +81,16 @@ void check_round_trip(const Mesh& m, int q) {
 
 TEST_CASE("lossless round trip on generated sets at q = 1, 12 and 21") {
   const std::vector<std::pair<const char*, Mesh>> inputs = {
-      {"sphere surface", testgen::uv_sphere(20, 30)},
-      {"torus", testgen::torus(40, 20)},
-      {"random ball", testgen::random_ball(3000, 1)},
-      {"lattice", testgen::lattice(9, 7, 5)},
-      {"clustered", testgen::clustered(6, 300, 2)},
-      {"coplanar", testgen::coplanar(800, 3)},
-      {"collinear", testgen::collinear(200, 4)},
-      {"one point", testgen::all_duplicates(1)},
+      {"sphere surface", samples::uv_sphere(20, 30)},
+      {"torus", samples::torus(40, 20)},
+      {"random ball", samples::random_ball(3000, 1)},
+      {"lattice", samples::lattice(9, 7, 5)},
+      {"clustered", samples::clustered(6, 300, 2)},
+      {"coplanar", samples::coplanar(800, 3)},
+      {"collinear", samples::collinear(200, 4)},
+      {"one point", samples::all_duplicates(1)},
       {"two points", [] { Mesh m; m.points = {{0, 0, 0}, {1e-3, 2e-3, -5e-4}}; return m; }()},
-      {"all duplicates", testgen::all_duplicates(500)},
+      {"all duplicates", samples::all_duplicates(500)},
   };
   for (const auto& [name, mesh] : inputs)
     for (int q : {1, 12, 21}) {
@@ -100,15 +101,15 @@ TEST_CASE("lossless round trip on generated sets at q = 1, 12 and 21") {
 }
 
 TEST_CASE("the stream codes the set: input order does not change a byte") {
-  Mesh m = testgen::random_ball(2000, 9);
+  Mesh m = samples::random_ball(2000, 9);
   auto a = encode(m).value().bytes;
-  testgen::Rng rng(3);
+  samples::Rng rng(3);
   std::shuffle(m.points.begin(), m.points.end(), rng);
   CHECK(encode(m).value().bytes == a);
 }
 
 TEST_CASE("duplicates before quantization are merged and counted") {
-  Mesh m = testgen::lattice(4, 4, 4);
+  Mesh m = samples::lattice(4, 4, 4);
   const auto n = m.points.size();
   for (std::size_t i = 0; i < n; ++i) m.points.push_back(m.points[i]);
   auto e = encode(m).value();
@@ -118,46 +119,46 @@ TEST_CASE("duplicates before quantization are merged and counted") {
 }
 
 TEST_CASE("kind is detected from the connectivity and can be overridden") {
-  CHECK(encode(testgen::torus(10, 8)).value().report.kind == Kind::surface);
-  CHECK(encode(testgen::random_ball(50, 1)).value().report.kind == Kind::points);
-  Mesh t = testgen::lattice(2, 2, 2);
+  CHECK(encode(samples::torus(10, 8)).value().report.kind == Kind::surface);
+  CHECK(encode(samples::random_ball(50, 1)).value().report.kind == Kind::points);
+  Mesh t = samples::lattice(2, 2, 2);
   t.tetrahedra.push_back({0, 1, 2, 4});
   CHECK(encode(t).value().report.kind == Kind::volume);
   EncodeOptions o;
   o.kind = Kind::volume;
-  auto e = encode(testgen::random_ball(50, 1), o).value();
+  auto e = encode(samples::random_ball(50, 1), o).value();
   CHECK(decode_ok(e.bytes).kind == Kind::volume);
 }
 
 TEST_CASE("bad encoder input is refused with invalid_argument") {
   CHECK(encode(Mesh{}).status() == Status::invalid_argument);
-  Mesh m = testgen::random_ball(10, 1);
+  Mesh m = samples::random_ball(10, 1);
   m.points[3][1] = std::nan("");
   auto r = encode(m);
   CHECK(r.status() == Status::invalid_argument);
   CHECK(r.error().message.find("point 3") != std::string::npos);
   m.points[3][1] = INFINITY;
   CHECK(encode(m).status() == Status::invalid_argument);
-  CHECK(encode(testgen::random_ball(10, 1), EncodeOptions{0, std::nullopt, true}).status() == Status::invalid_argument);
-  CHECK(encode(testgen::random_ball(10, 1), EncodeOptions{22, std::nullopt, true}).status() == Status::invalid_argument);
+  CHECK(encode(samples::random_ball(10, 1), EncodeOptions{0, std::nullopt, true}).status() == Status::invalid_argument);
+  CHECK(encode(samples::random_ball(10, 1), EncodeOptions{22, std::nullopt, true}).status() == Status::invalid_argument);
   Mesh huge;
   huge.points = {{-1e308, 0, 0}, {1e308, 0, 0}};
   CHECK(encode(huge).status() == Status::invalid_argument);
-  Mesh badtri = testgen::torus(6, 6);
+  Mesh badtri = samples::torus(6, 6);
   badtri.triangles.push_back({0, 1, 999});
   CHECK(encode(badtri).status() == Status::invalid_argument);
 }
 
 TEST_CASE("tiny and enormous coordinate ranges quantize onto the full grid") {
   for (double scale : {1e-200, 1e-9, 1.0, 1e9, 1e200}) {
-    Mesh m = testgen::random_ball(300, 5, scale);
+    Mesh m = samples::random_ball(300, 5, scale);
     CAPTURE(scale);
     check_round_trip(m, 12);
   }
 }
 
 TEST_CASE("a flipped byte anywhere is detected, never decoded into other points") {
-  auto b = encode(testgen::torus(30, 12)).value().bytes;
+  auto b = encode(samples::torus(30, 12)).value().bytes;
   const auto original = decode_ok(b).finest().points;
   for (std::size_t i = 0; i < b.size(); ++i) {
     auto c = b;
@@ -187,7 +188,7 @@ TEST_CASE("a flipped byte anywhere is detected, never decoded into other points"
 }
 
 TEST_CASE("a CRC error names the chunk and offset") {
-  auto b = encode(testgen::torus(30, 12)).value().bytes;
+  auto b = encode(samples::torus(30, 12)).value().bytes;
   b[b.size() - 20] ^= 1;  // inside the BASE payload
   auto d = decode(b.data(), b.size());
   REQUIRE(d.status() == Status::crc_mismatch);
@@ -196,7 +197,7 @@ TEST_CASE("a CRC error names the chunk and offset") {
 }
 
 TEST_CASE("truncation: before the level is complete it is an error; after it, the level decodes") {
-  auto b = encode(testgen::torus(30, 12)).value().bytes;
+  auto b = encode(samples::torus(30, 12)).value().bytes;
   auto view = parse_container(b.data(), b.size(), kEnd);
   std::size_t base_end = 0;
   for (const auto& c : view.chunks)
@@ -232,7 +233,7 @@ struct Chunks {
 };
 
 Chunks skeleton() {
-  auto b = encode(testgen::random_ball(100, 4)).value().bytes;
+  auto b = encode(samples::random_ball(100, 4)).value().bytes;
   auto v = parse_container(b.data(), b.size(), kEnd);
   Chunks c;
   for (const auto& ch : v.chunks) c.list.emplace_back(ch.type, std::vector<std::uint8_t>(ch.payload, ch.payload + ch.length));
@@ -389,14 +390,14 @@ TEST_CASE("hand-made malformed streams get their error class") {
 }
 
 TEST_CASE("limits: stream size") {
-  auto b = encode(testgen::random_ball(100, 4)).value().bytes;
+  auto b = encode(samples::random_ball(100, 4)).value().bytes;
   DecodeOptions o;
   o.limits.max_bytes = b.size() - 1;
   CHECK(decode_status(b, o) == Status::limit_exceeded);
 }
 
 TEST_CASE("inspect lists chunks and levels without decoding layers") {
-  auto e = encode(testgen::torus(30, 12)).value();
+  auto e = encode(samples::torus(30, 12)).value();
   auto i = inspect(e.bytes.data(), e.bytes.size());
   REQUIRE(i.ok());
   const auto& s = i.value();
@@ -413,7 +414,7 @@ TEST_CASE("inspect lists chunks and levels without decoding layers") {
 }
 
 TEST_CASE("the info chunk carries encoder statistics and can be omitted") {
-  Mesh m = testgen::all_duplicates(7);
+  Mesh m = samples::all_duplicates(7);
   auto d = decode_ok(encode(m).value().bytes);
   bool found = false;
   for (const auto& [k, v] : d.info)

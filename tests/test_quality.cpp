@@ -24,7 +24,8 @@
 #include <vector>
 
 #include "hmc/quality.hpp"
-#include "support/generators.hpp"
+#include "samples.hpp"
+#include "support/temp_dir.hpp"
 
 using hmc::Vec3;
 namespace q = hmc::quality;
@@ -401,7 +402,7 @@ TEST_CASE("quality: degenerate elements score exactly 0, never NaN") {
     all_zero(disphenoid(1, 1, 0));                                // a sliver with height 0
     // Points on the tilted plane z = 0.3x − 0.2y + 1, whose coordinates are
     // rounded: coplanar up to rounding, which the tests also count as flat.
-    const hmc::Mesh plane = hmc::testgen::coplanar(64, 7);
+    const hmc::Mesh plane = hmc::samples::coplanar(64, 7);
     for (std::size_t i = 0; i + 3 < plane.points.size(); i += 4)
       all_zero({plane.points[i], plane.points[i + 1], plane.points[i + 2], plane.points[i + 3]});
     // Flat at every scale.
@@ -409,7 +410,7 @@ TEST_CASE("quality: degenerate elements score exactly 0, never NaN") {
   }
   SUBCASE("coincident vertices") {
     all_zero({{{0, 0, 0}, {0, 0, 0}, {0, 1, 0}, {0, 0, 1}}});
-    const hmc::Mesh dup = hmc::testgen::all_duplicates(4);
+    const hmc::Mesh dup = hmc::samples::all_duplicates(4);
     all_zero({dup.points[0], dup.points[1], dup.points[2], dup.points[3]});
   }
   SUBCASE("degenerate triangles") {
@@ -424,7 +425,7 @@ TEST_CASE("quality: degenerate elements score exactly 0, never NaN") {
       CHECK(q::triangle_edge_ratio(t[0], t[1], t[2]) == 0.0);
     }
     // Points on a line with rounded coordinates.
-    const hmc::Mesh line = hmc::testgen::collinear(30, 3);
+    const hmc::Mesh line = hmc::samples::collinear(30, 3);
     for (std::size_t i = 0; i + 2 < line.points.size(); i += 3) {
       const Vec3 &a = line.points[i], &b = line.points[i + 1], &c = line.points[i + 2];
       CHECK(q::triangle_angle(a, b, c) == 0.0);
@@ -501,7 +502,7 @@ TEST_CASE("quality: evaluate() over a small mesh") {
     only_bad.points = {{0, 0, 0}};
     only_bad.triangles = {{0, 1, 2}};
     only_bad.tetrahedra = {{0, 0, 0, 7}};
-    for (const hmc::Mesh& e : {hmc::Mesh{}, hmc::testgen::random_ball(10, 1), only_bad}) {
+    for (const hmc::Mesh& e : {hmc::Mesh{}, hmc::samples::random_ball(10, 1), only_bad}) {
       const q::MeshQuality r = q::evaluate(e);
       for (const q::Stats* s : {&r.tri_angle, &r.tri_edge, &r.qt1, &r.qt2, &r.qt3, &r.qt4}) {
         CHECK(s->count == 0);

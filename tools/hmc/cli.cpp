@@ -15,7 +15,7 @@ namespace hmc::cli {
 
 namespace fs = std::filesystem;
 
-int exit_code(const Error& e, bool reading_stream) {
+int exit_code(const Error& e, Stage stage) {
   switch (e.status) {
     case Status::ok: return kOk;
     case Status::bad_magic:
@@ -29,17 +29,17 @@ int exit_code(const Error& e, bool reading_stream) {
     case Status::limit_exceeded: return kLimit;
     case Status::out_of_memory: return kMemory;
     case Status::internal_error: return kInternal;
-    case Status::invalid_argument:
+    case Status::invalid_argument: return stage == Stage::input ? kInput : kUsage;
     case Status::parse_error:
-    case Status::unsupported_format: return kInput;
-    case Status::io_error: return reading_stream ? kInput : kOutput;
+    case Status::unsupported_format: return stage == Stage::input ? kInput : kOutput;
+    case Status::io_error: return stage == Stage::input ? kInput : kOutput;
   }
   return kInternal;
 }
 
-int report(const std::string& what, const Error& e, bool reading_stream) {
+int report(const std::string& what, const Error& e, Stage stage) {
   std::fprintf(stderr, "hmc: %s: %s\n", what.c_str(), e.to_string().c_str());
-  return exit_code(e, reading_stream);
+  return exit_code(e, stage);
 }
 
 Args::Args(int argc, char** argv, int first, const std::vector<std::string>& flags,
@@ -97,6 +97,16 @@ long long Args::get_int(const std::string& name, long long def, long long lo, lo
     return def;
   }
   return v;
+}
+
+Outputs::~Outputs() {
+  std::error_code ec;
+  for (auto it = paths_.rbegin(); it != paths_.rend(); ++it) fs::remove_all(*it, ec);
+}
+
+bool exists(const std::string& path) {
+  std::error_code ec;
+  return fs::exists(path, ec);
 }
 
 std::string json_escape(const std::string& s) {

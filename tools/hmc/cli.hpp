@@ -25,11 +25,16 @@ enum Exit : int {
   kInternal = 70,    // bug
 };
 
-/// Exit code for a failed operation on input (`reading`) or output.
-int exit_code(const Error& e, bool reading_stream);
+/// What a failed operation was doing, which decides its exit code.
+enum class Stage { input, output };
+
+/// Exit code for a failed operation: stream errors are kStream whatever the
+/// stage; otherwise input problems are kInput, and output problems kOutput
+/// (kUsage when the output was refused, e.g. it would overwrite the input).
+int exit_code(const Error& e, Stage stage);
 
 /// Print "hmc: <what>: <error>" to stderr and return the exit code.
-int report(const std::string& what, const Error& e, bool reading_stream = false);
+int report(const std::string& what, const Error& e, Stage stage);
 
 /// Minimal argument parser: positional arguments, --flag and --opt VALUE
 /// (also --opt=VALUE). Options are declared up front so typos are errors.
@@ -52,6 +57,26 @@ class Args {
   std::vector<std::string> positional_;
   std::string error_;
 };
+
+/// The files and directories a command has written so far. Unless
+/// commit() is called, the destructor removes them, so a command that fails
+/// part-way leaves nothing behind.
+class Outputs {
+ public:
+  Outputs() = default;
+  Outputs(const Outputs&) = delete;
+  Outputs& operator=(const Outputs&) = delete;
+  ~Outputs();
+  /// Record a path written by this run (a directory only if this run created it).
+  void add(const std::string& path) { paths_.push_back(path); }
+  void commit() { paths_.clear(); }
+
+ private:
+  std::vector<std::string> paths_;
+};
+
+/// True if `path` exists (file or directory).
+bool exists(const std::string& path);
 
 /// A tiny JSON writer producing one object, keys in insertion order.
 class Json {

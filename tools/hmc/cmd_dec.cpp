@@ -38,10 +38,10 @@ int cmd_dec(int argc, char** argv) {
   const std::string in = a.positional()[0];
   const auto t0 = std::chrono::steady_clock::now();
   auto bytes = io::read_file(in, opt.limits.max_bytes);
-  if (!bytes) return report("cannot read " + in, bytes.error(), true);
+  if (!bytes) return report("cannot read " + in, bytes.error(), Stage::input);
   const auto& b = bytes.value();
   auto dec = decode(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), opt);
-  if (!dec) return report(in, dec.error(), true);
+  if (!dec) return report(in, dec.error(), Stage::input);
   const auto t1 = std::chrono::steady_clock::now();
   const Decoded& d = dec.value();
   if (d.truncated) std::fprintf(stderr, "hmc: warning: %s: %s\n", in.c_str(), d.warning.c_str());
@@ -49,28 +49,38 @@ int cmd_dec(int argc, char** argv) {
     std::fprintf(stderr, "hmc: warning: %s: level %d is not in the stream; the finest decoded level is %d\n", in.c_str(),
                  opt.finest_level, d.finest().lod);
 
+  Outputs written;
   if (!out.empty()) {
-    auto w = io::write_mesh(out, level_mesh(d, d.finest()));
-    if (!w) return report("cannot write " + out, w.error());
+    io::WriteOptions wo;
+    wo.protect_path = in;
+    auto w = io::write_mesh(out, level_mesh(d, d.finest()), io::Format::automatic, wo);
+    if (!w) return report("cannot write " + out, w.error(), Stage::output);
+    written.add(out);
   }
   if (a.has("--all-levels")) {
     const std::string dir = a.get("--all-levels");
+    if (!exists(dir)) written.add(dir);
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
-    if (ec) return report("cannot create " + dir, Error{Status::io_error, ec.message()});
+    if (ec) return report("cannot create " + dir, Error{Status::io_error, ec.message()}, Stage::output);
     const std::string ext = a.get("--ext", "ply");
     for (const auto& level : d.levels) {
       const std::string path = (std::filesystem::path(dir) / ("level-" + std::to_string(level.lod) + "." + ext)).string();
       auto w = io::write_mesh(path, level_mesh(d, level));
-      if (!w) return report("cannot write " + path, w.error());
+      if (!w) return report("cannot write " + path, w.error(), Stage::output);
+      written.add(path);
     }
   }
   if (a.has("--canonical")) {
+    const std::string dir = a.get("--canonical");
+    const bool existed = exists(dir);
     std::vector<std::pair<int, const std::vector<GridPoint>*>> levels;
     for (const auto& l : d.levels) levels.emplace_back(l.lod, &l.points);
-    auto w = write_canonical_dump(a.get("--canonical"), d.kind, d.quantizer, d.declared_points, levels);
-    if (!w) return report("cannot write the canonical dump", w.error());
+    auto w = write_canonical_dump(dir, d.kind, d.quantizer, d.declared_points, levels);
+    if (!w) return report("cannot write the canonical dump", w.error(), Stage::output);
+    if (!existed) written.add(dir);
   }
+  written.commit();
   const double secs = std::chrono::duration<double>(t1 - t0).count();
   if (a.flag("--json")) {
     Json j;

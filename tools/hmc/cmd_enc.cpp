@@ -53,22 +53,28 @@ int cmd_enc(int argc, char** argv) {
 
   const auto t0 = std::chrono::steady_clock::now();
   auto mesh = io::read_mesh(in, in_format);
-  if (!mesh) return report("cannot read " + in, mesh.error(), true);
+  if (!mesh) return report("cannot read " + in, mesh.error(), Stage::input);
   const auto t1 = std::chrono::steady_clock::now();
   auto enc = encode(mesh.value(), opt);
-  if (!enc) return report("cannot encode " + in, enc.error(), true);
+  if (!enc) return report("cannot encode " + in, enc.error(), Stage::input);
   const auto t2 = std::chrono::steady_clock::now();
   const Encoded& e = enc.value();
+  Outputs written;
   if (!out.empty()) {
     auto w = io::write_file_atomic(out, std::string_view(reinterpret_cast<const char*>(e.bytes.data()), e.bytes.size()), in);
-    if (!w) return report("cannot write " + out, w.error());
+    if (!w) return report("cannot write " + out, w.error(), Stage::output);
+    written.add(out);
   }
   if (a.has("--canonical")) {
+    const std::string dir = a.get("--canonical");
+    const bool existed = exists(dir);
     std::vector<std::uint64_t> declared;
     for (const auto& l : e.report.levels) declared.push_back(l.points);
-    auto w = write_canonical_dump(a.get("--canonical"), e.report.kind, e.report.quantizer, declared, {{0, &e.points}});
-    if (!w) return report("cannot write the canonical dump", w.error());
+    auto w = write_canonical_dump(dir, e.report.kind, e.report.quantizer, declared, {{0, &e.points}});
+    if (!w) return report("cannot write the canonical dump", w.error(), Stage::output);
+    if (!existed) written.add(dir);
   }
+  written.commit();
   const double read_s = std::chrono::duration<double>(t1 - t0).count();
   const double enc_s = std::chrono::duration<double>(t2 - t1).count();
   const EncodeReport& r = e.report;

@@ -17,10 +17,10 @@ int cmd_info(int argc, char** argv) {
   const std::string in = a.positional()[0];
   DecodeLimits limits;
   auto bytes = io::read_file(in, limits.max_bytes);
-  if (!bytes) return report("cannot read " + in, bytes.error(), true);
+  if (!bytes) return report("cannot read " + in, bytes.error(), Stage::input);
   const auto& b = bytes.value();
   auto res = inspect(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), limits);
-  if (!res) return report(in, res.error(), true);
+  if (!res) return report(in, res.error(), Stage::input);
   const StreamInfo& s = res.value();
   if (a.flag("--json")) {
     Json j;

@@ -14,6 +14,7 @@ namespace hmc::cli {
 int cmd_enc(int argc, char** argv);
 int cmd_dec(int argc, char** argv);
 int cmd_info(int argc, char** argv);
+int cmd_gen(int argc, char** argv);
 }  // namespace hmc::cli
 
 namespace {
@@ -36,6 +37,8 @@ const char* kUsage =
     "      --max-points N      refuse streams with more points (default 67108864)\n"
     "      --json              print a summary as JSON\n"
     "  info IN.hmc         list chunks and levels [--json]\n"
+    "  gen SAMPLE -o OUT   write a generated sample: torus, sphere (surfaces), ball, lattice (points)\n"
+    "      --vertices N        about N vertices (default 36450)    --seed S   random seed\n"
     "  version             print the library version\n"
     "\n"
     "exit codes: 0 ok, 1 usage, 2 input file error, 3 invalid or corrupt stream,\n"
@@ -52,6 +55,7 @@ int main(int argc, char** argv) {
   if (cmd == "enc") return hmc::cli::cmd_enc(argc, argv);
   if (cmd == "dec") return hmc::cli::cmd_dec(argc, argv);
   if (cmd == "info") return hmc::cli::cmd_info(argc, argv);
+  if (cmd == "gen") return hmc::cli::cmd_gen(argc, argv);
   if (cmd == "version" || cmd == "--version") {
     std::printf("hmc %s\n", hmc::version_string());
     return 0;

@@ -55,7 +55,10 @@ Result<Mesh> read_mesh(const std::string& path, Format format = Format::automati
 /// Options for writing.
 struct WriteOptions {
   bool binary = true;        ///< PLY, VTK: binary (little-endian PLY) or ascii
-  int precision = 17;        ///< significant digits for ascii coordinates
+  int precision = 17;        ///< significant digits for ascii coordinates (17 or more: shortest exact text)
+  /// When set, refuse (invalid_argument) to write over this file: a command
+  /// passes its input path so it can never overwrite what it reads.
+  std::string protect_path;
 };
 
 /// Write a mesh. Surfaces (triangles) go to PLY, OBJ, VTK, VTU; tetrahedra to

@@ -357,8 +357,8 @@ class Reader {
     const std::uint64_t n = in_.read_uint<std::uint64_t>(big_, "node count");
     in_.skip(16, "node tag range");
     check_points(n);
-    in_.check_binary_count(blocks, 20, "entity block");
     in_.check_binary_count(n, 32, "node");
+    in_.check_binary_count(blocks, 20, "entity block");
     mesh_.points.reserve(static_cast<std::size_t>(n));
     nodes_.reserve(static_cast<std::size_t>(n));
     for (std::uint64_t b = 0; b < blocks; ++b) {

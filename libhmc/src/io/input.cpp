@@ -9,8 +9,7 @@ namespace hmc::io::detail {
 std::string_view Input::token(std::string_view what) {
   std::string_view t;
   if (!next_token(t)) {
-    mark_ = pos_;
-    line_ = cur_line_;
+    mark_ = pos_;  // the line stays that of the last token: the file may end in a newline
     fail("unexpected end of file, expected " + std::string(what));
   }
   return t;
@@ -22,6 +21,7 @@ void Input::expect_keyword(std::string_view keyword) {
 }
 
 void Input::skip_line() noexcept {
+  if (pos_ >= data_.size()) return;
   const char* b = data_.data() + pos_;
   const auto* nl = static_cast<const char*>(std::memchr(b, '\n', data_.size() - pos_));
   if (nl) {
@@ -79,9 +79,11 @@ void Input::check_text_count(std::uint64_t n, std::uint64_t fields, std::string_
 
 void Input::check_binary_count(std::uint64_t n, std::uint64_t bytes, std::string_view what) const {
   if (bytes == 0) return;
-  if (n > remaining() / bytes)
-    fail(std::string(what) + " count " + std::to_string(n) + " needs more than the " + std::to_string(remaining()) +
-         " remaining bytes of the file");
+  if (n <= remaining() / bytes) return;
+  const std::string message = std::string(what) + " count " + std::to_string(n) + " needs more than the " +
+                              std::to_string(remaining()) + " remaining bytes of the file";
+  if (binary_) fail_at_offset(pos_, message);
+  fail(message);
 }
 
 double Input::read_f64(bool big_endian, std::string_view what) {

@@ -124,7 +124,8 @@ class Input {
   /// Fails unless `n` items of at least `fields` whitespace-separated fields
   /// each could fit in the rest of the file; call before reserving memory.
   void check_text_count(std::uint64_t n, std::uint64_t fields, std::string_view what) const;
-  /// Same for binary items of `bytes` bytes each.
+  /// Same for binary items of `bytes` bytes each (reported at the current
+  /// offset in binary mode).
   void check_binary_count(std::uint64_t n, std::uint64_t bytes, std::string_view what) const;
 
   // ---- binary -----------------------------------------------------------

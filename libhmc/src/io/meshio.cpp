@@ -58,7 +58,15 @@ class Fd {
 // into place. Removes itself unless committed.
 class Staged {
  public:
-  Staged(std::string target, std::string_view bytes) : target_(std::move(target)) { write(bytes); }
+  Staged(std::string target, std::string_view bytes) : target_(std::move(target)) {
+    try {
+      write(bytes);
+    } catch (...) {
+      // The destructor does not run for a constructor that throws.
+      if (!temp_.empty()) ::unlink(temp_.c_str());
+      throw;
+    }
+  }
   Staged(const Staged&) = delete;
   Staged& operator=(const Staged&) = delete;
   Staged(Staged&& o) noexcept : target_(std::move(o.target_)), temp_(std::move(o.temp_)) { o.temp_.clear(); }
@@ -147,9 +155,12 @@ bool same_file(const std::string& a, const std::string& b) {
     const bool eq = fs::equivalent(a, b, ec);
     if (!ec) return eq;
   }
+  // Absolute first, so that a relative and an absolute spelling of a file in
+  // a directory that does not exist yet still compare equal.
+  const fs::path aa = fs::absolute(a).lexically_normal(), ab = fs::absolute(b).lexically_normal();
   std::error_code ca, cb;
-  const fs::path pa = fs::weakly_canonical(a, ca), pb = fs::weakly_canonical(b, cb);
-  if (ca || cb) return fs::absolute(a).lexically_normal() == fs::absolute(b).lexically_normal();
+  const fs::path pa = fs::weakly_canonical(aa, ca), pb = fs::weakly_canonical(ab, cb);
+  if (ca || cb) return aa == ab;
   return pa == pb;
 }
 
@@ -355,6 +366,8 @@ Result<Mesh> read_mesh(const std::string& path, Format format) {
 
 Result<Done> write_mesh(const std::string& path, const Mesh& mesh, Format format, const WriteOptions& options) {
   return hmc::detail::guarded<Result<Done>>([&]() -> Result<Done> {
+    if (!options.protect_path.empty() && same_file(path, options.protect_path))
+      fail(Status::invalid_argument, "output would overwrite the input '" + options.protect_path + "'");
     write_any(path, mesh, format, options);
     return Done{};
   });

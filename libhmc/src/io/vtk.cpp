@@ -183,7 +183,7 @@ class Reader {
     std::uint64_t used = 0;
     for (std::uint64_t i = 0; i < n; ++i) {
       const std::int64_t k = integer(t, "cell point count");
-      if (k < 0 || static_cast<std::uint64_t>(k) > size - used - 1)
+      if (k < 0 || used >= size || static_cast<std::uint64_t>(k) > size - used - 1)
         in_.fail("cell " + std::to_string(i) + " point count " + std::to_string(k) + " overruns the declared size " +
                  std::to_string(size) + " of " + std::string(keyword));
       used += 1 + static_cast<std::uint64_t>(k);

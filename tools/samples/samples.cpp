@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "support/generators.hpp"
+#include "samples.hpp"
 
 #include <cmath>
-#include <filesystem>
 
-namespace hmc::testgen {
+namespace hmc::samples {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
@@ -124,13 +123,4 @@ Mesh all_duplicates(std::size_t n) {
   return m;
 }
 
-std::string temp_dir(const std::string& name) {
-  namespace fs = std::filesystem;
-  fs::path p = fs::path(HMC_TEST_TMPDIR) / name;
-  std::error_code ec;
-  fs::remove_all(p, ec);
-  fs::create_directories(p);
-  return p.string();
-}
-
-}  // namespace hmc::testgen
+}  // namespace hmc::samples

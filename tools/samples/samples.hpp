@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-// Generated test inputs: every test builds its own data, nothing is read
-// from outside the repository.
+// Generated sample inputs: the tests build their data from these (nothing is
+// read from outside the repository), and `hmc gen` writes them for users,
+// the quick start and the benchmarks.
 #pragma once
 
 #include <cstdint>
 #include <random>
-#include <string>
 #include <vector>
 
 #include "hmc/mesh.hpp"
 
-namespace hmc::testgen {
+namespace hmc::samples {
 
 /// Deterministic random source for tests.
 using Rng = std::mt19937_64;
@@ -34,7 +34,4 @@ Mesh collinear(std::size_t n, std::uint64_t seed);
 /// `n` copies of the same point.
 Mesh all_duplicates(std::size_t n);
 
-/// A fresh empty directory under the test build tree.
-std::string temp_dir(const std::string& name);
-
-}  // namespace hmc::testgen
+}  // namespace hmc::samples

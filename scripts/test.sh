@@ -1,0 +1,7 @@
+#!/bin/sh
+# SPDX-License-Identifier: AGPL-3.0-or-later
+# Set up, build, and run the whole test suite (what CI runs).
+set -eu
+. "$(dirname "$0")/setup.sh"
+JOBS=$(nproc 2>/dev/null || echo 2)
+ctest --test-dir "$HMC_BUILD" --output-on-failure -j "$JOBS"

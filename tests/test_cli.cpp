@@ -1,0 +1,173 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// The hmc command line, run as a user runs it: exit codes, messages,
+// outputs, and nothing left behind on failure.
+#include <doctest/doctest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "hmc/meshio.hpp"
+#include "samples.hpp"
+#include "support/temp_dir.hpp"
+
+namespace fs = std::filesystem;
+using namespace hmc;
+
+namespace {
+
+struct Run {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+Run hmc_run(const std::string& dir, const std::string& args) {
+  const std::string o = dir + "/.stdout", e = dir + "/.stderr";
+  const std::string cmd = std::string("'") + HMC_BINARY + "' " + args + " >'" + o + "' 2>'" + e + "'";
+  int status = std::system(cmd.c_str());
+  Run r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(o);
+  r.err = slurp(e);
+  fs::remove(o);
+  fs::remove(e);
+  return r;
+}
+
+std::string q(const std::string& s) { return "'" + s + "'"; }
+
+std::size_t entries(const std::string& dir) {
+  std::size_t n = 0;
+  for (auto it = fs::directory_iterator(dir); it != fs::directory_iterator(); ++it) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("enc, info and dec round trip through files, with matching canonical dumps") {
+  const auto dir = testgen::temp_dir("cli_roundtrip");
+  REQUIRE(io::write_mesh(dir + "/torus.ply", samples::torus(60, 30)).ok());
+  auto r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/t.hmc") + " --bits 11 --canonical " +
+                            q(dir + "/enc-dump"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(r.out.find("1800 points") != std::string::npos);
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " -o " + q(dir + "/points.xyz") + " --canonical " + q(dir + "/dec-dump"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(slurp(dir + "/enc-dump/header.json") == slurp(dir + "/dec-dump/header.json"));
+  CHECK(slurp(dir + "/enc-dump/level-0.points") == slurp(dir + "/dec-dump/level-0.points"));
+  CHECK(slurp(dir + "/dec-dump/header.json").find("\"q\": 11") != std::string::npos);
+  auto pts = io::read_mesh(dir + "/points.xyz");
+  REQUIRE(pts.ok());
+  CHECK(pts.value().points.size() == 1800);
+
+  r = hmc_run(dir, "info " + q(dir + "/t.hmc") + " --json");
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("\"type\": \"HEAD\"") != std::string::npos);
+  CHECK(r.out.find("\"points\": 1800") != std::string::npos);
+  CHECK(r.out.find("\"kind\": \"surface\"") != std::string::npos);
+}
+
+TEST_CASE("canonical points are sorted grid integers, one per line") {
+  const auto dir = testgen::temp_dir("cli_canonical");
+  REQUIRE(io::write_mesh(dir + "/l.xyz", samples::lattice(3, 2, 2)).ok());
+  auto r = hmc_run(dir, "enc " + q(dir + "/l.xyz") + " -o " + q(dir + "/l.hmc") + " --bits 2");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  r = hmc_run(dir, "dec " + q(dir + "/l.hmc") + " --canonical " + q(dir + "/d"));
+  REQUIRE(r.code == 0);
+  // The 3x2x2 lattice spans 2 units: step 2/3 on a q = 2 grid, so 0, 1, 2
+  // map to 0, 1.5, 3 -> 0, 2, 3 (halves round up).
+  CHECK(slurp(dir + "/d/level-0.points") ==
+        "0 0 0\n0 0 2\n0 2 0\n0 2 2\n2 0 0\n2 0 2\n2 2 0\n2 2 2\n3 0 0\n3 0 2\n3 2 0\n3 2 2\n");
+}
+
+TEST_CASE("a corrupt stream exits 3 with the error class and writes nothing") {
+  const auto dir = testgen::temp_dir("cli_corrupt");
+  REQUIRE(io::write_mesh(dir + "/b.ply", samples::random_ball(500, 3)).ok());
+  REQUIRE(hmc_run(dir, "enc " + q(dir + "/b.ply") + " -o " + q(dir + "/b.hmc")).code == 0);
+  std::string bytes = slurp(dir + "/b.hmc");
+  bytes[bytes.size() - 30] = static_cast<char>(bytes[bytes.size() - 30] ^ 0x10);
+  std::ofstream(dir + "/bad.hmc", std::ios::binary) << bytes;
+  auto r = hmc_run(dir, "dec " + q(dir + "/bad.hmc") + " -o " + q(dir + "/out.ply") + " --canonical " + q(dir + "/dump"));
+  CHECK(r.code == 3);
+  CHECK(r.err.find("crc_mismatch") != std::string::npos);
+  CHECK(r.err.find("BASE") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir + "/out.ply"));
+  CHECK_FALSE(fs::exists(dir + "/dump"));
+
+  std::ofstream(dir + "/short.hmc", std::ios::binary) << bytes.substr(0, 60);
+  r = hmc_run(dir, "dec " + q(dir + "/short.hmc"));
+  CHECK(r.code == 3);
+  CHECK(r.err.find("truncated") != std::string::npos);
+
+  std::ofstream(dir + "/text.hmc") << "ply\nformat ascii 1.0\n";
+  r = hmc_run(dir, "info " + q(dir + "/text.hmc"));
+  CHECK(r.code == 3);
+  CHECK(r.err.find("bad_magic") != std::string::npos);
+}
+
+TEST_CASE("limits: --max-points refuses a larger stream with exit 5") {
+  const auto dir = testgen::temp_dir("cli_limits");
+  REQUIRE(io::write_mesh(dir + "/b.ply", samples::random_ball(500, 3)).ok());
+  REQUIRE(hmc_run(dir, "enc " + q(dir + "/b.ply") + " -o " + q(dir + "/b.hmc")).code == 0);
+  auto r = hmc_run(dir, "dec " + q(dir + "/b.hmc") + " --max-points 100");
+  CHECK(r.code == 5);
+  CHECK(r.err.find("limit_exceeded") != std::string::npos);
+}
+
+TEST_CASE("bad input files exit 2 naming the problem, and leave no output") {
+  const auto dir = testgen::temp_dir("cli_badinput");
+  std::ofstream(dir + "/nan.xyz") << "0 0 0\n1 2 3\n4 nan 6\n";
+  auto r = hmc_run(dir, "enc " + q(dir + "/nan.xyz") + " -o " + q(dir + "/o.hmc"));
+  CHECK(r.code == 2);
+  CHECK(r.err.find("nan.xyz:3") != std::string::npos);
+  std::ofstream(dir + "/empty.xyz") << "";
+  r = hmc_run(dir, "enc " + q(dir + "/empty.xyz") + " -o " + q(dir + "/o.hmc"));
+  CHECK(r.code == 2);
+  r = hmc_run(dir, "enc " + q(dir + "/missing.ply") + " -o " + q(dir + "/o.hmc"));
+  CHECK(r.code == 2);
+  r = hmc_run(dir, "enc " + q(dir + "/nan.unknown") + " -o " + q(dir + "/o.hmc"));
+  CHECK(r.code == 2);
+  CHECK_FALSE(fs::exists(dir + "/o.hmc"));
+  CHECK(entries(dir) == 2);  // nan.xyz, empty.xyz
+}
+
+TEST_CASE("outputs: never over the input, missing directory, usage errors") {
+  const auto dir = testgen::temp_dir("cli_outputs");
+  REQUIRE(io::write_mesh(dir + "/s.ply", samples::uv_sphere(8, 12)).ok());
+  const std::string before = slurp(dir + "/s.ply");
+  auto r = hmc_run(dir, "enc " + q(dir + "/s.ply") + " -o " + q(dir + "/s.ply"));
+  CHECK(r.code == 1);
+  CHECK(r.err.find("overwrite the input") != std::string::npos);
+  CHECK(slurp(dir + "/s.ply") == before);
+  r = hmc_run(dir, "enc " + q(dir + "/s.ply") + " -o " + q(dir + "/no/such/dir/s.hmc"));
+  CHECK(r.code == 4);
+  CHECK(entries(dir) == 1);
+  CHECK(hmc_run(dir, "enc " + q(dir + "/s.ply") + " -o x.hmc --bits 22").code == 1);
+  CHECK(hmc_run(dir, "enc " + q(dir + "/s.ply") + " -o x.hmc --kind blob").code == 1);
+  CHECK(hmc_run(dir, "enc " + q(dir + "/s.ply") + " -o x.hmc --frobnicate").code == 1);
+  CHECK(hmc_run(dir, "enc").code == 1);
+  CHECK(hmc_run(dir, "nonsense").code == 1);
+  CHECK(hmc_run(dir, "help").code == 0);
+  CHECK(entries(dir) == 1);
+}
+
+TEST_CASE("gen writes the samples the quick start uses") {
+  const auto dir = testgen::temp_dir("cli_gen");
+  auto r = hmc_run(dir, "gen torus --vertices 36450 -o " + q(dir + "/t.ply"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  auto m = io::read_mesh(dir + "/t.ply");
+  REQUIRE(m.ok());
+  CHECK(m.value().points.size() == 36450);
+  CHECK(m.value().triangles.size() == 72900);
+  CHECK(hmc_run(dir, "gen cube -o " + q(dir + "/c.ply")).code == 1);
+}
