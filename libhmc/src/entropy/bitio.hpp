@@ -49,20 +49,19 @@ class BitWriter {
 /// Reads bits from a bounded buffer. Reading past the end raises bad_layer.
 class BitReader {
  public:
-  BitReader(const std::uint8_t* p, std::size_t n, std::string what) : p_(p), nbits_(n * 8), what_(std::move(what)) {}
+  BitReader(const std::uint8_t* p, std::size_t n, std::string what)
+      : p_(p), nbytes_(n), nbits_(std::uint64_t{n} * 8), what_(std::move(what)) {}
 
+  /// The next n bits (n <= 32).
   std::uint32_t get(int n) {
     if (static_cast<std::uint64_t>(n) > nbits_ - pos_) overrun();
-    std::uint32_t v = 0;
-    for (int i = 0; i < n; ++i, ++pos_) v = (v << 1) | ((p_[pos_ >> 3] >> (7 - (pos_ & 7))) & 1u);
+    const std::uint32_t v = peek(n);
+    pos_ += static_cast<std::uint64_t>(n);
     return v;
   }
-  /// The next `n` bits (n <= 24) without consuming them; zeros past the end.
+  /// The next `n` bits (n <= 32) without consuming them; zeros past the end.
   std::uint32_t peek(int n) const {
-    std::uint32_t v = 0;
-    std::uint64_t q = pos_;
-    for (int i = 0; i < n; ++i, ++q) v = (v << 1) | (q < nbits_ ? ((p_[q >> 3] >> (7 - (q & 7))) & 1u) : 0u);
-    return v;
+    return n == 0 ? 0 : static_cast<std::uint32_t>(window() >> (64 - n));
   }
   void consume(int n) {
     if (static_cast<std::uint64_t>(n) > nbits_ - pos_) overrun();
@@ -87,11 +86,24 @@ class BitReader {
   std::uint64_t bits_left() const { return nbits_ - pos_; }
 
  private:
+  // 64 bits starting at the current position, at least 57 of them real
+  // (zeros beyond the end of the buffer).
+  std::uint64_t window() const {
+    const std::size_t byte = static_cast<std::size_t>(pos_ >> 3);
+    std::uint64_t w = 0;
+    if (byte + 8 <= nbytes_) {
+      for (int i = 0; i < 8; ++i) w = (w << 8) | p_[byte + static_cast<std::size_t>(i)];
+    } else {
+      for (std::size_t i = 0; i < 8; ++i) w = (w << 8) | (byte + i < nbytes_ ? p_[byte + i] : 0u);
+    }
+    return w << (pos_ & 7);
+  }
   [[noreturn]] void overrun() const {
     fail(Status::bad_layer, what_ + ": bit stream ends early (at bit " + std::to_string(pos_) + " of " +
                                 std::to_string(nbits_) + ")");
   }
   const std::uint8_t* p_;
+  std::size_t nbytes_;
   std::uint64_t nbits_;
   std::uint64_t pos_ = 0;
   std::string what_;

@@ -125,6 +125,14 @@ void HuffmanCode::assign_codes() {
     // decodes with a length <= len.
     limit_[len] = code << (kHuffmanMaxLength - len);
   }
+  fast_.assign(std::size_t{1} << kFastBits, 0);
+  for (std::uint32_t s = 0; s < a; ++s) {
+    const int len = lengths_[s];
+    if (len == 0 || len > kFastBits) continue;
+    const std::uint32_t first = codes_[s] << (kFastBits - len);
+    for (std::uint32_t i = 0; i < (1u << (kFastBits - len)); ++i)
+      fast_[first + i] = (static_cast<std::uint32_t>(len) << 24) | s;
+  }
 }
 
 HuffmanCode HuffmanCode::read(BitReader& in, std::uint32_t alphabet, const std::string& what) {
@@ -180,7 +188,11 @@ void HuffmanCode::write(BitWriter& out) const {
 std::uint32_t HuffmanCode::decode(BitReader& in) const {
   if (single_) return single_symbol_;
   const std::uint32_t peek = in.peek(kHuffmanMaxLength);
-  int len = 1;
+  if (const std::uint32_t e = fast_[peek >> (kHuffmanMaxLength - kFastBits)]) {
+    in.consume(static_cast<int>(e >> 24));
+    return e & 0xffffffu;
+  }
+  int len = kFastBits + 1;
   while (peek >= limit_[len]) ++len;  // terminates: the code is complete, limit_[15] == 2^15
   in.consume(len);
   const std::uint32_t code = peek >> (kHuffmanMaxLength - len);

@@ -54,6 +54,10 @@ class HuffmanCode {
   std::uint32_t limit_[kHuffmanMaxLength + 2] = {};
   std::uint32_t first_code_[kHuffmanMaxLength + 1] = {};
   std::uint32_t first_index_[kHuffmanMaxLength + 1] = {};
+  // Codes of up to kFastBits bits decode with one lookup: entry =
+  // (length << 24) | symbol, 0 where the code is longer.
+  static constexpr int kFastBits = 10;
+  std::vector<std::uint32_t> fast_;
   std::string what_;
 };
 

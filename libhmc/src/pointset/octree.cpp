@@ -6,6 +6,7 @@
 
 #include "entropy/huffman.hpp"
 #include "util/error.hpp"
+#include "util/radix_sort.hpp"
 
 namespace hmc::detail {
 
@@ -27,12 +28,22 @@ GridPoint morton_point(std::uint64_t key, int q) {
   return p;
 }
 
-void sort_canonical(std::vector<GridPoint>& points) { std::sort(points.begin(), points.end()); }
+void sort_canonical(std::vector<GridPoint>& points) {
+  // Coordinates are below 2^21, so (x, y, z) packs into one key that sorts
+  // in canonical order.
+  std::vector<std::uint64_t> keys(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    keys[i] = (std::uint64_t{points[i][0]} << 42) | (std::uint64_t{points[i][1]} << 21) | points[i][2];
+  radix_sort(keys, 63);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    points[i] = {static_cast<std::uint32_t>(keys[i] >> 42), static_cast<std::uint32_t>((keys[i] >> 21) & 0x1fffff),
+                 static_cast<std::uint32_t>(keys[i] & 0x1fffff)};
+}
 
 std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, int q) {
   std::vector<std::uint64_t> keys(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q);
-  std::sort(keys.begin(), keys.end());
+  radix_sort(keys, 3 * q);
 
   // Occupancy symbols per depth, in breadth-first (= Morton) order.
   std::vector<std::vector<std::uint8_t>> symbols(static_cast<std::size_t>(q));
