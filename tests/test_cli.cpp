@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -170,4 +171,24 @@ TEST_CASE("gen writes the samples the quick start uses") {
   CHECK(m.value().points.size() == 36450);
   CHECK(m.value().triangles.size() == 72900);
   CHECK(hmc_run(dir, "gen cube -o " + q(dir + "/c.ply")).code == 1);
+}
+
+TEST_CASE("quality reports the thesis' tests with stable JSON keys") {
+  const auto dir = testgen::temp_dir("cli_quality");
+  // A regular tetrahedron (alternate cube corners) and its four faces: every score is 1.
+  Mesh m;
+  m.points = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+  m.tetrahedra = {{0, 1, 2, 3}};
+  m.triangles = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  REQUIRE(io::write_mesh(dir + "/t.mesh", m).ok());
+  auto r = hmc_run(dir, "quality " + q(dir + "/t.mesh") + " --json");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  for (const char* key : {"qt1", "qt2", "qt3", "qt4", "tri_angle", "tri_edge"}) {
+    CAPTURE(key);
+    const auto at = r.out.find(std::string("\"") + key + "\": ");
+    REQUIRE(at != std::string::npos);
+    CHECK(std::strtod(r.out.c_str() + at + std::strlen(key) + 4, nullptr) == doctest::Approx(1.0).epsilon(1e-12));
+  }
+  CHECK(r.out.find("\"tetrahedra\": 1") != std::string::npos);
+  CHECK(hmc_run(dir, "quality " + q(dir + "/none.mesh")).code == 2);
 }

@@ -15,6 +15,7 @@ int cmd_enc(int argc, char** argv);
 int cmd_dec(int argc, char** argv);
 int cmd_info(int argc, char** argv);
 int cmd_gen(int argc, char** argv);
+int cmd_quality(int argc, char** argv);
 }  // namespace hmc::cli
 
 namespace {
@@ -37,6 +38,7 @@ const char* kUsage =
     "      --max-points N      refuse streams with more points (default 67108864)\n"
     "      --json              print a summary as JSON\n"
     "  info IN.hmc         list chunks and levels [--json]\n"
+    "  quality MESH        element quality (thesis 3.5): triangle angle and edge ratio, QT1-QT4 [--json]\n"
     "  gen SAMPLE -o OUT   write a generated sample: torus, sphere (surfaces), ball, lattice (points)\n"
     "      --vertices N        about N vertices (default 36450)    --seed S   random seed\n"
     "  version             print the library version\n"
@@ -56,6 +58,7 @@ int main(int argc, char** argv) {
   if (cmd == "dec") return hmc::cli::cmd_dec(argc, argv);
   if (cmd == "info") return hmc::cli::cmd_info(argc, argv);
   if (cmd == "gen") return hmc::cli::cmd_gen(argc, argv);
+  if (cmd == "quality") return hmc::cli::cmd_quality(argc, argv);
   if (cmd == "version" || cmd == "--version") {
     std::printf("hmc %s\n", hmc::version_string());
     return 0;
