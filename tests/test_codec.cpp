@@ -189,7 +189,9 @@ TEST_CASE("a flipped byte anywhere is detected, never decoded into other points"
 
 TEST_CASE("a CRC error names the chunk and offset") {
   auto b = encode(samples::torus(30, 12)).value().bytes;
-  b[b.size() - 20] ^= 1;  // inside the BASE payload
+  auto view = parse_container(b.data(), b.size(), kEnd);
+  for (const auto& c : view.chunks)
+    if (c.type == kBaseLayer) b[c.offset + 8 + c.length / 2] ^= 1;  // inside the BASE payload
   auto d = decode(b.data(), b.size());
   REQUIRE(d.status() == Status::crc_mismatch);
   CHECK(d.error().message.find("BASE") != std::string::npos);
@@ -199,9 +201,9 @@ TEST_CASE("a CRC error names the chunk and offset") {
 TEST_CASE("truncation: before the level is complete it is an error; after it, the level decodes") {
   auto b = encode(samples::torus(30, 12)).value().bytes;
   auto view = parse_container(b.data(), b.size(), kEnd);
-  std::size_t base_end = 0;
+  std::size_t base_end = 0;  // a surface level is complete with its RCON
   for (const auto& c : view.chunks)
-    if (c.type == kBaseLayer) base_end = c.offset + kChunkOverhead + c.length;
+    if (c.type == kRecon) base_end = c.offset + kChunkOverhead + c.length;
   REQUIRE(base_end > 0);
   for (std::size_t n = 0; n < b.size(); ++n) {
     std::vector<std::uint8_t> c(b.begin(), b.begin() + static_cast<long>(n));
@@ -401,9 +403,11 @@ TEST_CASE("inspect lists chunks and levels without decoding layers") {
   auto i = inspect(e.bytes.data(), e.bytes.size());
   REQUIRE(i.ok());
   const auto& s = i.value();
-  REQUIRE(s.chunks.size() == 5);
+  REQUIRE(s.chunks.size() == 6);
   CHECK(s.chunks[0].type == "HEAD");
   CHECK(s.chunks[2].type == "info");
+  CHECK(s.chunks[3].type == "BASE");
+  CHECK(s.chunks[4].type == "RCON");
   CHECK_FALSE(s.chunks[2].critical);
   CHECK(s.chunks.back().type == "HEND");
   REQUIRE(s.levels.size() == 1);

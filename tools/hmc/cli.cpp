@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <algorithm>
 
 #include "hmc/meshio.hpp"
 
@@ -229,12 +230,30 @@ std::string points_text(const std::vector<GridPoint>& pts) {
 
 }  // namespace
 
+template <std::size_t N>
+std::string simplices_text(const std::vector<std::array<std::uint32_t, N>>& simplices) {
+  std::vector<std::array<std::uint32_t, N>> s(simplices);
+  for (auto& x : s) std::sort(x.begin(), x.end());
+  std::sort(s.begin(), s.end());
+  std::string out;
+  for (const auto& x : s) {
+    for (std::size_t i = 0; i < N; ++i) out += (i ? " " : "") + std::to_string(x[i]);
+    out += "\n";
+  }
+  return out;
+}
+
 Result<Done> write_canonical_dump(const std::string& dir, Kind kind, const ScalarQuantizer& q,
                                   const std::vector<std::uint64_t>& declared_points,
-                                  const std::vector<std::pair<int, const std::vector<GridPoint>*>>& levels) {
+                                  const std::vector<DumpLevel>& levels) {
   std::vector<std::pair<std::string, std::string>> files;
   files.emplace_back("header.json", header_json(kind, q, declared_points));
-  for (const auto& [lod, pts] : levels) files.emplace_back("level-" + std::to_string(lod) + ".points", points_text(*pts));
+  for (const auto& l : levels) {
+    const std::string stem = "level-" + std::to_string(l.lod);
+    files.emplace_back(stem + ".points", points_text(*l.points));
+    if (kind == Kind::surface && l.triangles) files.emplace_back(stem + ".simplices", simplices_text(*l.triangles));
+    if (kind == Kind::volume && l.tetrahedra) files.emplace_back(stem + ".simplices", simplices_text(*l.tetrahedra));
+  }
 
   std::error_code ec;
   const bool existed = fs::exists(dir, ec);

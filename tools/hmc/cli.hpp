@@ -104,12 +104,21 @@ class Json {
 
 std::string json_escape(const std::string& s);
 
-/// Canonical dump (spec "Canonical dump"): header.json and level-K.points.
-/// Written atomically: into a fresh directory renamed into place, or file by
-/// file into an existing directory, removing what was written on failure.
+/// One level of a canonical dump.
+struct DumpLevel {
+  int lod = 0;
+  const std::vector<GridPoint>* points = nullptr;
+  const std::vector<Triangle>* triangles = nullptr;       // surface kind
+  const std::vector<Tetrahedron>* tetrahedra = nullptr;   // volume kind
+};
+
+/// Canonical dump (spec "Canonical dump"): header.json, level-K.points and,
+/// for surface and volume kinds, level-K.simplices. Written atomically: into
+/// a fresh directory renamed into place, or file by file into an existing
+/// directory, removing what was written on failure.
 Result<Done> write_canonical_dump(const std::string& dir, Kind kind, const ScalarQuantizer& q,
                                   const std::vector<std::uint64_t>& declared_points,
-                                  const std::vector<std::pair<int, const std::vector<GridPoint>*>>& levels);
+                                  const std::vector<DumpLevel>& levels);
 
 /// Format a double as C printf "%.17g".
 std::string g17(double v);

@@ -16,19 +16,22 @@ Mesh level_mesh(const Decoded& d, const DecodedLevel& level) {
   Mesh m;
   m.points.reserve(level.points.size());
   for (const auto& p : level.points) m.points.push_back(d.quantizer.dequantize(p));
+  m.triangles = level.triangles;
+  m.tetrahedra = level.tetrahedra;
   return m;
 }
 
 }  // namespace
 
 int cmd_dec(int argc, char** argv) {
-  Args a(argc, argv, 2, {"--json"},
+  Args a(argc, argv, 2, {"--json", "--points-only"},
          {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels"});
   DecodeOptions opt;
   opt.finest_level = static_cast<int>(a.get_int("--level", 0, 0, 63));
   opt.limits.max_points = static_cast<std::uint64_t>(
       a.get_int("--max-points", static_cast<long long>(opt.limits.max_points), 1, 1ll << 40));
   opt.limits.max_levels = static_cast<std::uint32_t>(a.get_int("--max-levels", 64, 1, 64));
+  opt.reconstruct = !a.flag("--points-only");
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
   if (!a.ok() || a.positional().size() != 1) {
     std::fprintf(stderr, "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR] [--canonical DIR] [--json]\n",
@@ -74,8 +77,8 @@ int cmd_dec(int argc, char** argv) {
   if (a.has("--canonical")) {
     const std::string dir = a.get("--canonical");
     const bool existed = exists(dir);
-    std::vector<std::pair<int, const std::vector<GridPoint>*>> levels;
-    for (const auto& l : d.levels) levels.emplace_back(l.lod, &l.points);
+    std::vector<DumpLevel> levels;
+    for (const auto& l : d.levels) levels.push_back({l.lod, &l.points, &l.triangles, &l.tetrahedra});
     auto w = write_canonical_dump(dir, d.kind, d.quantizer, d.declared_points, levels);
     if (!w) return report("cannot write the canonical dump", w.error(), Stage::output);
     if (!existed) written.add(dir);
@@ -93,6 +96,8 @@ int cmd_dec(int argc, char** argv) {
     for (const auto& l : d.levels) {
       j.begin_object();
       j.key("level").value(l.lod).key("points").value(static_cast<std::uint64_t>(l.points.size()));
+      j.key("triangles").value(static_cast<std::uint64_t>(l.triangles.size()));
+      j.key("tetrahedra").value(static_cast<std::uint64_t>(l.tetrahedra.size()));
       j.key("stream_bytes").value(l.stream_bytes);
       j.end_object();
     }
@@ -101,9 +106,10 @@ int cmd_dec(int argc, char** argv) {
   } else {
     std::printf("%s: %s, q = %d, %d level(s) declared, %zu decoded in %.3f s\n", in.c_str(), kind_name(d.kind),
                 d.quantizer.bits, d.level_count(), d.levels.size(), secs);
-    std::printf("%6s %10s %12s\n", "level", "points", "stream bytes");
+    std::printf("%6s %10s %10s %10s %12s\n", "level", "points", "triangles", "tetrahedra", "stream bytes");
     for (const auto& l : d.levels)
-      std::printf("%6d %10zu %12llu\n", l.lod, l.points.size(), static_cast<unsigned long long>(l.stream_bytes));
+      std::printf("%6d %10zu %10zu %10zu %12llu\n", l.lod, l.points.size(), l.triangles.size(), l.tetrahedra.size(),
+                  static_cast<unsigned long long>(l.stream_bytes));
   }
   return kOk;
 }

@@ -25,7 +25,8 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 }  // namespace
 
 int cmd_enc(int argc, char** argv) {
-  Args a(argc, argv, 2, {"--json", "--no-info"}, {"-o", "--output", "--bits", "--kind", "--canonical", "--format"});
+  Args a(argc, argv, 2, {"--json", "--no-info"},
+         {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
   bool kind_ok = true;
@@ -35,6 +36,14 @@ int cmd_enc(int argc, char** argv) {
     return kUsage;
   }
   opt.write_info = !a.flag("--no-info");
+  const std::string fid = a.get("--fidelity", "shape");
+  if (fid == "rule") opt.fidelity = Fidelity::rule;
+  else if (fid == "shape") opt.fidelity = Fidelity::shape;
+  else if (fid == "exact") opt.fidelity = Fidelity::exact;
+  else {
+    std::fprintf(stderr, "hmc enc: --fidelity must be rule, shape or exact\n");
+    return kUsage;
+  }
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
   if (!a.ok() || a.positional().size() != 1 || (out.empty() && !a.has("--canonical"))) {
     std::fprintf(stderr, "hmc enc: %s\nusage: hmc enc IN -o OUT.hmc [--bits Q] [--kind K] [--canonical DIR] [--json]\n",
@@ -70,7 +79,8 @@ int cmd_enc(int argc, char** argv) {
     const bool existed = exists(dir);
     std::vector<std::uint64_t> declared;
     for (const auto& l : e.report.levels) declared.push_back(l.points);
-    auto w = write_canonical_dump(dir, e.report.kind, e.report.quantizer, declared, {{0, &e.points}});
+    auto w = write_canonical_dump(dir, e.report.kind, e.report.quantizer, declared,
+                                  {DumpLevel{0, &e.points, &e.triangles, &e.tetrahedra}});
     if (!w) return report("cannot write the canonical dump", w.error(), Stage::output);
     if (!existed) written.add(dir);
   }
@@ -92,20 +102,29 @@ int cmd_enc(int argc, char** argv) {
     for (const auto& l : r.levels) {
       j.begin_object();
       j.key("level").value(l.lod).key("points").value(l.points).key("new_points").value(l.new_points);
-      j.key("layer_bytes").value(l.layer_bytes).key("stream_bytes").value(l.stream_bytes);
+      j.key("layer_bytes").value(l.layer_bytes).key("side_bytes").value(l.side_bytes);
+      j.key("stream_bytes").value(l.stream_bytes);
+      j.key("label_corrections").value(l.label_corrections).key("rule_mismatches").value(l.rule_mismatches);
       j.end_object();
     }
-    j.end_array().end_object();
+    j.end_array();
+    j.key("triangles").value(static_cast<std::uint64_t>(e.triangles.size()));
+    j.key("tetrahedra").value(static_cast<std::uint64_t>(e.tetrahedra.size()));
+    j.end_object();
     std::fputs(j.str().c_str(), stdout);
   } else {
     std::printf("%s: %s, %llu points (%llu duplicates merged after quantization), q = %d\n", in.c_str(),
                 kind_name(r.kind), static_cast<unsigned long long>(r.distinct_points),
                 static_cast<unsigned long long>(r.duplicates_merged), r.quantizer.bits);
-    std::printf("%6s %10s %10s %12s %12s\n", "level", "points", "new", "layer bytes", "bits/point");
+    std::printf("%6s %10s %10s %12s %11s %12s %12s\n", "level", "points", "new", "layer bytes", "side bytes",
+                "corrections", "bits/point");
     for (const auto& l : r.levels)
-      std::printf("%6d %10llu %10llu %12llu %12.3f\n", l.lod, static_cast<unsigned long long>(l.points),
+      std::printf("%6d %10llu %10llu %12llu %11llu %12llu %12.3f\n", l.lod, static_cast<unsigned long long>(l.points),
                   static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
+                  static_cast<unsigned long long>(l.side_bytes), static_cast<unsigned long long>(l.label_corrections),
                   8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points));
+    if (r.kind != Kind::points)
+      std::printf("rebuilt by the decoder: %zu triangles, %zu tetrahedra\n", e.triangles.size(), e.tetrahedra.size());
     std::printf("%s: %llu bytes, %.3f bits per point (read %.3f s, encode %.3f s)\n", out.empty() ? "(no output)" : out.c_str(),
                 static_cast<unsigned long long>(r.total_bytes), bpp, read_s, enc_s);
   }

@@ -58,6 +58,14 @@ struct VectorQuantizer {
   std::vector<std::array<std::int32_t, 3>> codebook;
 };
 
+/// How much reconstruction side information the encoder sends.
+enum class Fidelity : std::uint8_t {
+  rule = 0,   ///< only the rule's parameters: the decoder's own best guess
+  shape = 1,  ///< also correct every label that changes the shape; leave flips of
+              ///< flat tetrahedra (diagonals of near-planar quads) to the rule
+  exact = 2,  ///< also correct those: the decoded labels equal the input's exactly
+};
+
 /// Encoder settings.
 struct EncodeOptions {
   /// q, bits per axis of the quantization grid, 1..21.
@@ -67,6 +75,8 @@ struct EncodeOptions {
   std::optional<Kind> kind;
   /// Write the ancillary `info` chunk (encoder name, input statistics).
   bool write_info = true;
+  /// Reconstruction side information (surface and volume kinds).
+  Fidelity fidelity = Fidelity::shape;
 };
 
 /// Per-level figures of an encoded or decoded stream.
@@ -74,8 +84,11 @@ struct LevelReport {
   int lod = 0;                 ///< level index, 0 = finest
   std::uint64_t points = 0;    ///< points of this level (cumulative)
   std::uint64_t new_points = 0;///< points this level's layer adds
-  std::uint64_t layer_bytes = 0;  ///< bytes of this level's layer chunk(s), with framing
+  std::uint64_t layer_bytes = 0;  ///< bytes of this level's point layer chunk, with framing
+  std::uint64_t side_bytes = 0;   ///< bytes of its reconstruction side information (RCON), with framing
   std::uint64_t stream_bytes = 0; ///< prefix of the stream that decodes this level
+  std::uint64_t label_corrections = 0;  ///< tetrahedron labels the side information corrects
+  std::uint64_t rule_mismatches = 0;    ///< labels the rule alone gets wrong (encoder only)
 };
 
 /// What the encoder did.
@@ -96,6 +109,10 @@ struct Encoded {
   /// The finest level's points as the decoder will output them
   /// (distinct quantized input points, ascending).
   std::vector<GridPoint> points;
+  /// The finest level's connectivity as the decoder will rebuild it
+  /// (indices into `points`): triangles for surfaces, tetrahedra for volumes.
+  std::vector<Triangle> triangles;
+  std::vector<Tetrahedron> tetrahedra;
 };
 
 /// Quantize and encode `input`. Errors: invalid_argument (bits out of range,
@@ -115,6 +132,9 @@ struct DecodeOptions {
   DecodeLimits limits;
   /// Stop after this level (0 = decode down to the finest level).
   int finest_level = 0;
+  /// Rebuild triangles or tetrahedra (surface and volume kinds). When false
+  /// only points are decoded; side information is still validated.
+  bool reconstruct = true;
 };
 
 /// One decoded level.
@@ -122,6 +142,11 @@ struct DecodedLevel {
   int lod = 0;                     ///< level index, 0 = finest
   std::vector<GridPoint> points;   ///< canonical order: ascending (x, y, z)
   std::uint64_t stream_bytes = 0;  ///< prefix length of the stream that decodes it
+  /// Rebuilt connectivity, indices into `points` (surface kind: triangles,
+  /// counter-clockwise seen from outside; volume kind: positively oriented
+  /// tetrahedra), in canonical order (spec "Reconstruction").
+  std::vector<Triangle> triangles;
+  std::vector<Tetrahedron> tetrahedra;
 };
 
 /// A decoded stream.

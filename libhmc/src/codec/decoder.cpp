@@ -2,6 +2,8 @@
 #include <string>
 
 #include "codec/format.hpp"
+#include "delaunay/delaunay.hpp"
+#include "reconstruct/reconstruct.hpp"
 #include "pointset/octree.hpp"
 #include "util/error.hpp"
 
@@ -38,7 +40,12 @@ struct ChunkWalker {
   std::size_t layers = 0;  // layer chunks seen (BASE, then refinements)
   bool end_seen = false;
 
-  enum class Action { skip, header, quantizer, vector_quantizer, layer, end, info };
+  std::size_t recons = 0;  // RCON chunks seen
+  bool needs_recon() const { return header->kind != Kind::points; }
+  /// Levels complete so far: a layer, plus its RCON for surface and volume kinds.
+  std::size_t complete() const { return needs_recon() ? recons : layers; }
+
+  enum class Action { skip, header, quantizer, vector_quantizer, layer, recon, end, info };
 
   Action classify(const ChunkView& c) {
     const std::string name = to_string(c.type) + " chunk at offset " + std::to_string(c.offset);
@@ -63,6 +70,8 @@ struct ChunkWalker {
       return Action::quantizer;
     }
     if (!quantizer) fail(Status::bad_chunk, name + ": SQNT must come before it");
+    if (needs_recon() && recons < layers && c.type != kRecon && is_critical(c.type))
+      fail(Status::bad_chunk, name + ": the previous level's RCON must come first");
     if (c.type == kVectorQuantizer) {
       if (vq_seen) fail(Status::bad_chunk, name + ": second VQTB");
       if (layers) fail(Status::bad_chunk, name + ": VQTB must come before the base layer");
@@ -74,10 +83,16 @@ struct ChunkWalker {
       ++layers;
       return Action::layer;
     }
+    if (c.type == kRecon) {
+      if (!needs_recon()) fail(Status::bad_chunk, name + ": RCON in a stream of kind points");
+      if (recons == layers) fail(Status::bad_chunk, name + ": RCON must follow its level's layer chunk, once");
+      ++recons;
+      return Action::recon;
+    }
     // HEND
     if (c.length != 0) fail(Status::bad_chunk, name + ": HEND must be empty");
-    if (layers != header->points.size())
-      fail(Status::bad_chunk, name + ": HEND after " + std::to_string(layers) + " of " +
+    if (complete() != header->points.size() || (needs_recon() && recons != layers))
+      fail(Status::bad_chunk, name + ": HEND after " + std::to_string(complete()) + " of " +
                                   std::to_string(header->points.size()) + " declared levels");
     end_seen = true;
     return Action::end;
@@ -92,8 +107,8 @@ void check_size(std::size_t size, const DecodeLimits& limits) {
 
 std::string truncation_warning(const ContainerView& view, const ChunkWalker& walk) {
   std::string why = view.truncated ? view.truncation : "the stream ends before HEND";
-  return why + "; decoded " + std::to_string(walk.layers) + " of " + std::to_string(walk.header->points.size()) +
-         " levels";
+  return why + "; decoded " + std::to_string(walk.complete()) + " of " +
+         std::to_string(walk.header->points.size()) + " levels";
 }
 
 Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOptions& options) {
@@ -103,6 +118,7 @@ Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOpti
   out.version_major = view.major;
   out.version_minor = view.minor;
   ChunkWalker walk(options.limits);
+  std::optional<DecodedLevel> pending;  // a level whose points are decoded, waiting for its RCON
   for (const ChunkView& c : view.chunks) {
     switch (walk.classify(c)) {
       case ChunkWalker::Action::header:
@@ -118,11 +134,28 @@ Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOpti
         if (c.length < 1) fail(Status::bad_layer, "BASE: empty payload");
         if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
           fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
-        DecodedLevel level;
-        level.lod = static_cast<int>(walk.header->points.size()) - 1;
-        level.points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, walk.header->points.front());
-        level.stream_bytes = c.offset + kChunkOverhead + c.length;
-        out.levels.push_back(std::move(level));
+        pending = DecodedLevel{};
+        pending->lod = static_cast<int>(walk.header->points.size()) - 1;
+        pending->points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, walk.header->points.front());
+        pending->stream_bytes = c.offset + kChunkOverhead + c.length;
+        if (!walk.needs_recon()) {
+          out.levels.push_back(std::move(*pending));
+          pending.reset();
+        }
+        break;
+      }
+      case ChunkWalker::Action::recon: {
+        if (!pending) break;  // a level after the requested one
+        const ReconParams params = read_recon(c, pending->points.size());
+        if (options.reconstruct) {
+          const auto dt = delaunay(pending->points);
+          auto rec = reconstruct(pending->points, dt, walk.header->kind, params);
+          pending->triangles = std::move(rec.triangles);
+          pending->tetrahedra = std::move(rec.tetrahedra);
+        }
+        pending->stream_bytes = c.offset + kChunkOverhead + c.length;
+        out.levels.push_back(std::move(*pending));
+        pending.reset();
         break;
       }
       case ChunkWalker::Action::skip:
@@ -163,6 +196,9 @@ StreamInfo inspect_impl(const std::uint8_t* data, std::size_t size, const Decode
       info.declared_points = walk.header->points;
     } else if (action == ChunkWalker::Action::quantizer) {
       info.quantizer = *walk.quantizer;
+    } else if (action == ChunkWalker::Action::recon) {
+      info.levels.back().side_bytes = kChunkOverhead + c.length;
+      info.levels.back().stream_bytes = c.offset + kChunkOverhead + c.length;
     } else if (action == ChunkWalker::Action::layer) {
       LevelReport lr;
       const std::size_t k = walk.layers - 1;

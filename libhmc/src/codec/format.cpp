@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "entropy/huffman.hpp"
 #include "util/bytes.hpp"
 #include "util/error.hpp"
 
@@ -20,7 +21,8 @@ void expect_consumed(const ByteReader& r, const ChunkView& c) {
 }  // namespace
 
 bool is_known_chunk(const ChunkType& t) {
-  return t == kHead || t == kScalarQuantizer || t == kVectorQuantizer || t == kBaseLayer || t == kEnd || t == kInfo;
+  return t == kHead || t == kScalarQuantizer || t == kVectorQuantizer || t == kBaseLayer || t == kRecon || t == kEnd ||
+         t == kInfo;
 }
 
 std::vector<std::uint8_t> Header::write() const {
@@ -118,6 +120,89 @@ VectorQuantizer read_vector_quantizer(const ChunkView& c) {
     }
   expect_consumed(r, c);
   return vq;
+}
+
+namespace {
+
+void write_index_list(ByteWriter& w, const std::vector<std::uint32_t>& list) {
+  w.varint(list.size());
+  std::uint64_t next = 0;  // smallest value the next entry may take
+  for (std::uint32_t v : list) {
+    w.varint(v - next);
+    next = std::uint64_t{v} + 1;
+  }
+}
+
+std::vector<std::uint32_t> read_index_list(ByteReader& r, std::uint64_t bound, const char* what) {
+  const std::uint64_t count = r.varint();
+  // Each entry takes at least one byte, and entries are distinct below `bound`.
+  if (count > r.remaining() || count > bound)
+    fail(Status::bad_layer, std::string("RCON: ") + what + " count " + std::to_string(count) + " is impossible here");
+  std::vector<std::uint32_t> list(count);
+  std::uint64_t next = 0;
+  for (auto& v : list) {
+    const std::uint64_t x = next + r.varint();
+    if (x >= bound || x < next)
+      fail(Status::bad_layer, std::string("RCON: ") + what + " index " + std::to_string(x) + " out of range");
+    v = static_cast<std::uint32_t>(x);
+    next = x + 1;
+  }
+  return list;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> write_recon(const ReconParams& p) {
+  ByteWriter w;
+  w.u8(p.peel ? 1 : 0);
+  w.u8(static_cast<std::uint8_t>(p.scale_rank));
+  w.varint(p.multipliers.size());
+  for (std::uint32_t m : p.multipliers) w.varint(m);
+  if (p.multipliers.size() > 1) {
+    std::vector<std::uint64_t> freq(p.multipliers.size(), 0);
+    for (auto c : p.vertex_class) ++freq[c];
+    const auto code = HuffmanCode::from_frequencies(freq);
+    BitWriter bw;
+    code.write(bw);
+    for (auto c : p.vertex_class) code.encode(bw, c);
+    w.bytes(bw.finish());
+  }
+  // Border vertices are only meaningful for surfaces; the list is empty otherwise.
+  write_index_list(w, p.border);
+  write_index_list(w, p.toggles);
+  return std::move(w.data());
+}
+
+ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
+  ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
+  ReconParams p;
+  const std::uint8_t flags = r.u8();
+  if (flags > 1) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
+  p.peel = flags & 1;
+  p.scale_rank = r.u8();
+  if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
+    fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");
+  const std::uint64_t k = r.varint();
+  if (k < 1 || k > kMaxClasses) fail(Status::bad_layer, "RCON: class count " + std::to_string(k) + " is outside 1..64");
+  p.multipliers.clear();
+  for (std::uint64_t i = 0; i < k; ++i) {
+    const std::uint64_t m = r.varint();
+    if (m < 1 || m > 65535) fail(Status::bad_layer, "RCON: multiplier " + std::to_string(m) + " is outside 1..65535");
+    if (!p.multipliers.empty() && m <= p.multipliers.back())
+      fail(Status::bad_layer, "RCON: multipliers must increase");
+    p.multipliers.push_back(static_cast<std::uint32_t>(m));
+  }
+  if (k > 1) {
+    BitReader br(r.here(), r.remaining(), "RCON classes");
+    const auto code = HuffmanCode::read(br, static_cast<std::uint32_t>(k), "RCON class table");
+    p.vertex_class.resize(points);
+    for (auto& v : p.vertex_class) v = static_cast<std::uint8_t>(code.decode(br));
+    r.skip(br.align());
+  }
+  p.border = read_index_list(r, points, "border");
+  p.toggles = read_index_list(r, std::uint64_t{0xffffffffu}, "toggle");
+  if (!r.at_end()) fail(Status::bad_layer, "RCON: " + std::to_string(r.remaining()) + " unexpected byte(s) at the end");
+  return p;
 }
 
 }  // namespace hmc::detail

@@ -10,6 +10,7 @@
 
 #include "container/container.hpp"
 #include "hmc/codec.hpp"
+#include "reconstruct/reconstruct.hpp"
 
 namespace hmc::detail {
 
@@ -17,6 +18,7 @@ inline constexpr ChunkType kHead = chunk_type("HEAD");
 inline constexpr ChunkType kScalarQuantizer = chunk_type("SQNT");
 inline constexpr ChunkType kVectorQuantizer = chunk_type("VQTB");
 inline constexpr ChunkType kBaseLayer = chunk_type("BASE");
+inline constexpr ChunkType kRecon = chunk_type("RCON");
 inline constexpr ChunkType kEnd = chunk_type("HEND");
 inline constexpr ChunkType kInfo = chunk_type("info");
 
@@ -42,6 +44,13 @@ ScalarQuantizer read_scalar_quantizer(const ChunkView& c);
 
 std::vector<std::uint8_t> write_vector_quantizer(const VectorQuantizer& vq);
 VectorQuantizer read_vector_quantizer(const ChunkView& c);
+
+/// RCON: reconstruction side information of one level with `points` points.
+std::vector<std::uint8_t> write_recon(const ReconParams& p);
+ReconParams read_recon(const ChunkView& c, std::uint64_t points);
+
+constexpr std::uint32_t kMaxClasses = 64;
+constexpr std::uint32_t kMaxScaleRank = 64;
 
 /// Base-layer coders (first byte of BASE).
 enum class BaseCoder : std::uint8_t { octree = 0 };

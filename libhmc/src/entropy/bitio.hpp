@@ -84,6 +84,14 @@ class BitReader {
       fail(Status::bad_layer, what_ + ": " + std::to_string((nbits_ - pos_) / 8) + " unused byte(s) after the bit stream");
   }
   std::uint64_t bits_left() const { return nbits_ - pos_; }
+  /// Skip the zero padding to the next byte boundary and return the number
+  /// of bytes consumed so far (for bit streams followed by byte fields).
+  std::size_t align() {
+    const std::uint64_t pad = (8 - (pos_ & 7)) & 7;
+    if (pad > nbits_ - pos_ || get(static_cast<int>(pad)) != 0)
+      fail(Status::bad_layer, what_ + ": non-zero padding bits");
+    return static_cast<std::size_t>(pos_ / 8);
+  }
 
  private:
   // 64 bits starting at the current position, at least 57 of them real

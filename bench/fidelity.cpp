@@ -1,0 +1,343 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Reconstruction fidelity of one model (issue 3's report): quantize, encode
+// with reconstruction side information, decode, and compare the decoded
+// connectivity with the input's own. Prints one JSON object.
+//
+// usage: fidelity MODEL [--bits Q] [--fidelity rule|shape|exact]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <numeric>
+#include <set>
+#include <string>
+
+#include "delaunay/delaunay.hpp"
+#include "hmc/codec.hpp"
+#include "hmc/meshio.hpp"
+#include "quant/scalar_quantizer.hpp"
+#include "reconstruct/reconstruct.hpp"
+#include "reconstruct/tuning.hpp"
+#include "reconstruct/winding.hpp"
+
+using namespace hmc;
+using namespace hmc::detail;
+
+namespace {
+
+using Face = std::array<std::uint32_t, 3>;
+Face sorted3(Face f) {
+  std::sort(f.begin(), f.end());
+  return f;
+}
+Tetrahedron sorted4(Tetrahedron t) {
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+// Point-to-triangle-set distance with an AABB tree (exact point-triangle
+// distance at the leaves).
+class Distance {
+ public:
+  Distance(const std::vector<Vec3>& p, const std::vector<Face>& tris) : p_(p), tris_(tris), order_(tris.size()) {
+    std::iota(order_.begin(), order_.end(), 0u);
+    nodes_.reserve(tris.size() * 2 / 4 + 2);
+    if (!tris.empty()) build(0, static_cast<std::uint32_t>(tris.size()));
+  }
+  double operator()(const Vec3& q) const {
+    double best = 1e300;
+    if (!nodes_.empty()) search(0, q, best);
+    return std::sqrt(best);
+  }
+
+ private:
+  struct Node {
+    Vec3 lo, hi;
+    std::uint32_t begin, end, left = 0, right = 0;
+  };
+  std::uint32_t build(std::uint32_t b, std::uint32_t e) {
+    const auto id = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.push_back({});
+    Node n{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}, b, e};
+    for (std::uint32_t i = b; i < e; ++i)
+      for (auto v : tris_[order_[i]])
+        for (int a = 0; a < 3; ++a) n.lo[a] = std::min(n.lo[a], p_[v][a]), n.hi[a] = std::max(n.hi[a], p_[v][a]);
+    if (e - b > 4) {
+      int ax = 0;
+      for (int a = 1; a < 3; ++a)
+        if (n.hi[a] - n.lo[a] > n.hi[ax] - n.lo[ax]) ax = a;
+      const std::uint32_t m = b + (e - b) / 2;
+      auto key = [&](std::uint32_t t) { return p_[tris_[t][0]][ax] + p_[tris_[t][1]][ax] + p_[tris_[t][2]][ax]; };
+      std::nth_element(order_.begin() + b, order_.begin() + m, order_.begin() + e,
+                       [&](std::uint32_t x, std::uint32_t y) { return key(x) < key(y); });
+      n.left = build(b, m);
+      n.right = build(m, e);
+    }
+    nodes_[id] = n;
+    return id;
+  }
+  static double box2(const Node& n, const Vec3& q) {
+    double s = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double d = std::max({n.lo[a] - q[a], 0.0, q[a] - n.hi[a]});
+      s += d * d;
+    }
+    return s;
+  }
+  void search(std::uint32_t id, const Vec3& q, double& best) const {
+    const Node& n = nodes_[id];
+    if (box2(n, q) >= best) return;
+    if (n.left == 0 && n.right == 0) {
+      for (std::uint32_t i = n.begin; i < n.end; ++i) best = std::min(best, tri2(tris_[order_[i]], q));
+      return;
+    }
+    const bool l_first = box2(nodes_[n.left], q) < box2(nodes_[n.right], q);
+    search(l_first ? n.left : n.right, q, best);
+    search(l_first ? n.right : n.left, q, best);
+  }
+  // Squared distance from q to triangle (Ericson's region test).
+  double tri2(const Face& f, const Vec3& q) const {
+    auto sub = [](const Vec3& x, const Vec3& y) { return Vec3{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
+    auto dot = [](const Vec3& x, const Vec3& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+    const Vec3 &a = p_[f[0]], &b = p_[f[1]], &c = p_[f[2]];
+    const Vec3 ab = sub(b, a), ac = sub(c, a), ap = sub(q, a);
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    auto at = [&](double s, double t) {
+      const Vec3 x{a[0] + s * ab[0] + t * ac[0], a[1] + s * ab[1] + t * ac[1], a[2] + s * ab[2] + t * ac[2]};
+      const Vec3 d = sub(q, x);
+      return dot(d, d);
+    };
+    if (d1 <= 0 && d2 <= 0) return at(0, 0);
+    const Vec3 bp = sub(q, b);
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return at(1, 0);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return at(d1 / (d1 - d3), 0);
+    const Vec3 cp = sub(q, c);
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return at(0, 1);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return at(0, d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+      const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+      return at(1 - w, w);
+    }
+    const double den = 1 / (va + vb + vc);
+    return at(vb * den, vc * den);
+  }
+  const std::vector<Vec3>& p_;
+  const std::vector<Face>& tris_;
+  std::vector<std::uint32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+// One-sided max distance from surface A (sampled) to surface B.
+double one_sided(const std::vector<Vec3>& p, const std::vector<Face>& a, const Distance& to_b) {
+  double worst = 0;
+  const double w[7][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, .5, 0}, {0, .5, .5}, {.5, 0, .5}, {1. / 3, 1. / 3, 1. / 3}};
+  for (const auto& f : a)
+    for (const auto& bc : w) {
+      Vec3 q{0, 0, 0};
+      for (int i = 0; i < 3; ++i)
+        for (int ax = 0; ax < 3; ++ax) q[ax] += bc[i] * p[f[i]][ax];
+      worst = std::max(worst, to_b(q));
+    }
+  return worst;
+}
+
+struct Topology {
+  std::size_t border_edges = 0, nonmanifold_edges = 0, components = 0;
+  long euler = 0;
+};
+
+Topology topology(const std::vector<Face>& tris) {
+  Topology t;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> edges;
+  std::set<std::uint32_t> verts;
+  for (std::uint32_t i = 0; i < tris.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const auto a = std::min(tris[i][k], tris[i][(k + 1) % 3]), b = std::max(tris[i][k], tris[i][(k + 1) % 3]);
+      edges[{a, b}].push_back(i);
+      verts.insert(tris[i][k]);
+    }
+  std::vector<std::uint32_t> parent(tris.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& [e, fs] : edges) {
+    if (fs.size() == 1) ++t.border_edges;
+    if (fs.size() > 2) ++t.nonmanifold_edges;
+    for (std::size_t i = 1; i < fs.size(); ++i) parent[find(fs[i])] = find(fs[0]);
+  }
+  for (std::uint32_t i = 0; i < tris.size(); ++i) t.components += find(i) == i;
+  t.euler = static_cast<long>(verts.size()) - static_cast<long>(edges.size()) + static_cast<long>(tris.size());
+  return t;
+}
+
+void topo_json(const char* key, const Topology& t) {
+  std::printf("\"%s\": {\"border_edges\": %zu, \"nonmanifold_edges\": %zu, \"components\": %zu, \"euler\": %ld}", key,
+              t.border_edges, t.nonmanifold_edges, t.components, t.euler);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|shape|exact]\n");
+    return 1;
+  }
+  int q = 12;
+  Fidelity fidelity = Fidelity::shape;
+  for (int i = 2; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--bits") && i + 1 < argc) q = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--fidelity") && i + 1 < argc) {
+      const std::string f = argv[++i];
+      fidelity = f == "rule" ? Fidelity::rule : f == "exact" ? Fidelity::exact : Fidelity::shape;
+    }
+  }
+  auto mesh = io::read_mesh(argv[1]);
+  if (!mesh) {
+    std::fprintf(stderr, "%s\n", mesh.error().to_string().c_str());
+    return 2;
+  }
+  const Mesh& m = mesh.value();
+  const Kind kind = m.tetrahedra.empty() ? Kind::surface : Kind::volume;
+  const auto sq = fit_quantizer(m.points, q);
+  const auto g = quantize(m.points, sq);
+  std::vector<GridPoint> pts(g);
+  std::sort(pts.begin(), pts.end());
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  std::vector<std::uint32_t> idx(g.size());
+  for (std::size_t i = 0; i < g.size(); ++i)
+    idx[i] = static_cast<std::uint32_t>(std::lower_bound(pts.begin(), pts.end(), g[i]) - pts.begin());
+  std::vector<Vec3> gp(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) gp[i] = {double(pts[i][0]), double(pts[i][1]), double(pts[i][2])};
+
+  // The input on the grid.
+  std::vector<Face> in_tris;
+  std::vector<Tetrahedron> in_tets;
+  for (const auto& t : m.triangles) {
+    Face f{idx[t[0]], idx[t[1]], idx[t[2]]};
+    if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) in_tris.push_back(f);
+  }
+  for (const auto& t : m.tetrahedra) {
+    Tetrahedron f{idx[t[0]], idx[t[1]], idx[t[2]], idx[t[3]]};
+    auto s = sorted4(f);
+    if (s[0] != s[1] && s[1] != s[2] && s[2] != s[3]) in_tets.push_back(f);
+  }
+  std::vector<Face> surface = kind == Kind::volume ? boundary_faces(gp, in_tets) : in_tris;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto dt = delaunay(pts);
+  const auto t1 = std::chrono::steady_clock::now();
+  const auto truth = truth_labels(pts, dt, gp, surface, surface);
+  const auto t2 = std::chrono::steady_clock::now();
+  // Border vertices of an open input surface.
+  std::vector<std::uint32_t> border;
+  if (kind == Kind::surface) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> ec;
+    for (const auto& f : in_tris)
+      for (int k = 0; k < 3; ++k) ++ec[{std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])}];
+    for (const auto& [e, c] : ec)
+      if (c == 1) border.push_back(e.first), border.push_back(e.second);
+    std::sort(border.begin(), border.end());
+    border.erase(std::unique(border.begin(), border.end()), border.end());
+  }
+  TuningReport rep;
+  const auto params = tune(pts, dt, kind, truth, border, fidelity, &rep);
+  const auto t3 = std::chrono::steady_clock::now();
+  const auto rec = reconstruct(pts, dt, kind, params);
+  const auto t4 = std::chrono::steady_clock::now();
+
+  // Delaunay faces and tets, for the ceiling.
+  std::set<Face> dt_faces;
+  std::set<Tetrahedron> dt_tets;
+  for (const auto& t : dt.tets) {
+    dt_tets.insert(sorted4(t));
+    for (int k = 0; k < 4; ++k) dt_faces.insert(sorted3({t[kFaceVertices[k][0]], t[kFaceVertices[k][1]], t[kFaceVertices[k][2]]}));
+  }
+  auto secs = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+  double diag = 0;
+  for (int a = 0; a < 3; ++a) {
+    double lo = 1e300, hi = -1e300;
+    for (const auto& p : gp) lo = std::min(lo, p[a]), hi = std::max(hi, p[a]);
+    diag += (hi - lo) * (hi - lo);
+  }
+  diag = std::sqrt(diag);
+
+  std::printf("{\"model\": \"%s\", \"kind\": \"%s\", \"fidelity\": \"%s\", \"points\": %zu, \"dt_tets\": %zu, ", argv[1],
+              kind_name(kind), fidelity == Fidelity::rule ? "rule" : fidelity == Fidelity::exact ? "exact" : "shape",
+              pts.size(), dt.tets.size());
+  std::printf("\"classes\": %zu, \"scale_rank\": %u, \"peel\": %s, \"toggles\": %zu, \"mismatches\": %llu, \"side_bits\": %llu, ",
+              params.multipliers.size(), params.scale_rank, params.peel ? "true" : "false", params.toggles.size(),
+              static_cast<unsigned long long>(rep.mismatches_before_toggles),
+              static_cast<unsigned long long>(rep.side_bits_estimate));
+  std::printf("\"seconds\": {\"delaunay\": %.3f, \"truth\": %.3f, \"tune\": %.3f, \"reconstruct\": %.3f}, ", secs(t0, t1),
+              secs(t1, t2), secs(t2, t3), secs(t3, t4));
+  if (kind == Kind::surface) {
+    std::set<Face> out;
+    for (const auto& f : rec.triangles) out.insert(sorted3(f));
+    std::set<Face> in;
+    for (const auto& f : in_tris) in.insert(sorted3(f));
+    std::size_t in_dt = 0, reproduced = 0, extra = 0;
+    for (const auto& f : in) {
+      in_dt += dt_faces.count(f);
+      reproduced += out.count(f);
+    }
+    for (const auto& f : out) extra += !in.count(f);
+    std::vector<Face> outv(rec.triangles.begin(), rec.triangles.end());
+    Distance to_in(gp, in_tris), to_out(gp, outv);
+    const double h = std::max(one_sided(gp, outv, to_in), one_sided(gp, in_tris, to_out));
+    std::printf("\"input_triangles\": %zu, \"in_delaunay\": %zu, \"ceiling_pct\": %.2f, \"reproduced\": %zu, "
+                "\"reproduced_pct_of_ceiling\": %.2f, \"output_triangles\": %zu, \"extra\": %zu, \"hausdorff_pct_diag\": %.4f, ",
+                in.size(), in_dt, 100.0 * in_dt / in.size(), reproduced, 100.0 * reproduced / std::max<std::size_t>(in_dt, 1),
+                out.size(), extra, 100.0 * h / diag);
+    topo_json("input_topology", topology(in_tris));
+    std::printf(", ");
+    topo_json("output_topology", topology(outv));
+  } else {
+    std::set<Tetrahedron> out, in;
+    for (const auto& t : rec.tetrahedra) out.insert(sorted4(t));
+    for (const auto& t : in_tets) in.insert(sorted4(t));
+    std::size_t in_dt = 0, reproduced = 0, extra = 0;
+    for (const auto& t : in) {
+      in_dt += dt_tets.count(t);
+      reproduced += out.count(t);
+    }
+    for (const auto& t : out) extra += !in.count(t);
+    std::vector<Tetrahedron> outv(rec.tetrahedra.begin(), rec.tetrahedra.end());
+    auto volume = [&](const std::vector<Tetrahedron>& ts) {
+      double v = 0;
+      for (const auto& t : ts) {
+        const Vec3 &a = gp[t[0]], &b = gp[t[1]], &c = gp[t[2]], &d = gp[t[3]];
+        const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
+                     x[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        v += std::abs(u[0] * (w[1] * x[2] - w[2] * x[1]) - u[1] * (w[0] * x[2] - w[2] * x[0]) + u[2] * (w[0] * x[1] - w[1] * x[0])) / 6;
+      }
+      return v;
+    };
+    const auto out_bd = boundary_faces(gp, outv);
+    std::set<std::uint32_t> out_bv, in_bv;
+    for (const auto& f : out_bd) out_bv.insert(f.begin(), f.end());
+    for (const auto& f : surface) in_bv.insert(f.begin(), f.end());
+    std::size_t missing_bv = 0;
+    for (auto v : in_bv) missing_bv += !out_bv.count(v);
+    Distance to_in(gp, surface), to_out(gp, out_bd);
+    const double h = std::max(one_sided(gp, out_bd, to_in), one_sided(gp, surface, to_out));
+    std::printf("\"input_tets\": %zu, \"in_delaunay\": %zu, \"ceiling_pct\": %.2f, \"reproduced\": %zu, "
+                "\"reproduced_pct_of_ceiling\": %.2f, \"output_tets\": %zu, \"extra\": %zu, \"volume_ratio\": %.5f, "
+                "\"boundary_vertices\": %zu, \"boundary_vertices_missing\": %zu, \"boundary_hausdorff_pct_diag\": %.4f, ",
+                in.size(), in_dt, 100.0 * in_dt / in.size(), reproduced, 100.0 * reproduced / std::max<std::size_t>(in_dt, 1),
+                out.size(), extra, volume(outv) / volume(in_tets), in_bv.size(), missing_bv, 100.0 * h / diag);
+    topo_json("input_boundary_topology", topology(surface));
+    std::printf(", ");
+    topo_json("output_boundary_topology", topology(out_bd));
+  }
+  std::printf("}\n");
+  return 0;
+}

@@ -1,0 +1,244 @@
+#!/bin/sh
+# SPDX-License-Identifier: AGPL-3.0-or-later
+# Regenerates the seed corpora fuzz/corpus/<target>/ (see fuzz/README.md).
+#
+# Valid streams come from the built command line: `hmc gen` samples of 3
+# to ~2,000 points encoded by `hmc enc` at q = 1, 2, 12 and 21, with and
+# without the info chunk. The other targets' seeds are cut from those
+# streams, and hand-made edge cases are added (empty and cut streams, bad
+# CRC, unknown and out-of-order chunks, VQTB, single-symbol octree codes,
+# NaN and halfway coordinates, ...). Deterministic: running it again gives
+# the same files.
+#
+# usage: fuzz/make_corpus.sh            (uses build/bin/hmc, or $HMC)
+set -eu
+
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+HMC=${HMC:-$ROOT/build/bin/hmc}
+CORPUS=$ROOT/fuzz/corpus
+if [ ! -x "$HMC" ]; then
+  echo "make_corpus: $HMC not found; build first (scripts/setup.sh) or set HMC" >&2
+  exit 1
+fi
+
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT INT TERM
+
+# Sample name, generator, vertex count.
+for spec in ball3:ball:3 ball40:ball:40 lattice64:lattice:64 sphere100:sphere:100 torus500:torus:500 \
+            ball2000:ball:2000; do
+  name=${spec%%:*}
+  rest=${spec#*:}
+  "$HMC" gen "${rest%%:*}" --vertices "${rest#*:}" --seed 7 -o "$WORK/$name.ply" >/dev/null
+  for q in 1 2 12 21; do
+    "$HMC" enc "$WORK/$name.ply" -o "$WORK/$name-q$q.hmc" --bits "$q" >/dev/null
+    "$HMC" enc "$WORK/$name.ply" -o "$WORK/$name-q$q-noinfo.hmc" --bits "$q" --no-info >/dev/null
+  done
+done
+
+rm -rf "$CORPUS"
+mkdir -p "$CORPUS"
+python3 - "$WORK" "$CORPUS" <<'EOF'
+import glob, os, struct, sys, zlib
+
+work, corpus = sys.argv[1], sys.argv[2]
+MAX_FILE = 64 * 1024
+SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
+
+def put(target, name, data):
+    d = os.path.join(corpus, target)
+    os.makedirs(d, exist_ok=True)
+    if len(data) > MAX_FILE:
+        return
+    with open(os.path.join(d, name), "wb") as f:
+        f.write(data)
+
+def chunk(t, payload):
+    t = t.encode()
+    return t + struct.pack("<I", len(payload)) + payload + struct.pack("<I", zlib.crc32(t + payload))
+
+def varint(v):
+    out = bytearray()
+    while v >= 0x80:
+        out.append((v & 0x7F) | 0x80)
+        v >>= 7
+    out.append(v)
+    return bytes(out)
+
+def svarint(v):
+    return varint(2 * v if v >= 0 else -2 * v - 1)   # zigzag
+
+def chunks(stream):
+    pos, out = 10, []
+    while pos + 8 <= len(stream):
+        t = stream[pos:pos + 4].decode()
+        n = struct.unpack("<I", stream[pos + 4:pos + 8])[0]
+        out.append((t, stream[pos + 8:pos + 8 + n]))
+        pos += 12 + n
+    return out
+
+def head(kind, counts):
+    return chunk("HEAD", bytes([kind, 0]) + varint(len(counts)) + b"".join(varint(c) for c in counts))
+
+def sqnt(q, origin=(0.0, 0.0, 0.0), step=1.0):
+    return chunk("SQNT", bytes([q]) + struct.pack("<4d", *origin, step))
+
+class Bits:
+    def __init__(self):
+        self.bits = []
+    def put(self, v, n):
+        self.bits += [(v >> i) & 1 for i in range(n - 1, -1, -1)]
+    def ue(self, v):
+        x, z = v + 1, 0
+        while (x >> (z + 1)) > 0:
+            z += 1
+        self.put(0, z)
+        self.put(x, z + 1)
+    def bytes(self):
+        b = self.bits + [0] * (-len(self.bits) % 8)
+        return bytes(int("".join(map(str, b[i:i + 8])), 2) for i in range(0, len(b), 8))
+
+PRE = SIG + bytes([0, 1])
+END = chunk("HEND", b"")
+
+# --- decode and container: the encoded samples and hand-made streams -----
+streams = {}
+for path in sorted(glob.glob(os.path.join(work, "*.hmc"))):
+    name = os.path.basename(path)[:-4]
+    data = open(path, "rb").read()
+    streams[name] = data
+    put("decode", name, data)
+    if name.endswith("-noinfo") or name.startswith(("ball3-", "torus500-q12")):
+        put("container", name, data)
+
+def single_symbol_octree(q, occ_per_depth):
+    b = Bits()
+    for occ in occ_per_depth:
+        b.put(1, 1)
+        b.put(occ, 8)
+    return bytes([0]) + b.bytes()
+
+s = streams["ball3-q2"]
+hand = {
+    "empty": b"",
+    "sig-only": SIG,
+    "sig-short": SIG[:5],
+    "preamble": PRE,
+    "bad-magic": b"\x89PNG\r\n\x1a\n" + s[8:],
+    "version-1": SIG + bytes([1, 0]) + s[10:],
+    "minor-99": SIG + bytes([0, 99]) + s[10:],
+    "hend-only": PRE + END,
+    "head-hend": PRE + head(0, [1]) + END,
+    "crc-flip": s[:-5] + bytes([s[-5] ^ 1]) + s[-4:],
+    "trailing-byte": s + b"\x00",
+    "cut-in-header": s[:14],
+    "cut-in-base": s[:len(s) - 20],
+    "cut-before-hend": s[:len(s) - 12],
+    "lowercase-critical": PRE + head(0, [1]) + chunk("zzzz", b"ancillary") + s[len(PRE) + len(head(0, [1])):],
+    "unknown-critical": PRE + chunk("ABCD", b""),
+    "bad-type": PRE + b"HE\x00D" + s[14:],
+    "huge-length": PRE + b"HEAD" + struct.pack("<I", 0x80000000) + b"\x00" * 8,
+    "second-head": PRE + head(0, [1]) + head(0, [1]) + END,
+    "two-levels": PRE + head(1, [1, 2]) + sqnt(1) + chunk("BASE", single_symbol_octree(1, [1])) + END,
+    "single-symbol-octree": PRE + head(2, [1]) + sqnt(3) + chunk("BASE", single_symbol_octree(3, [1, 2, 4])) + END,
+    "single-symbol-full": PRE + head(0, [512]) + sqnt(3) + chunk("BASE", single_symbol_octree(3, [255] * 3)) + END,
+    "single-symbol-many": PRE + head(0, [4096]) + sqnt(21)
+                          + chunk("BASE", single_symbol_octree(21, [255] * 4 + [1] * 17)) + END,
+    "too-many-points": PRE + head(0, [9]) + sqnt(1) + END,
+    "base-empty": PRE + head(0, [1]) + sqnt(1) + chunk("BASE", b"") + END,
+    "base-coder-1": PRE + head(0, [1]) + sqnt(1) + chunk("BASE", b"\x01") + END,
+    "sqnt-nan": PRE + head(0, [1]) + chunk("SQNT", bytes([1]) + struct.pack("<4d", float("nan"), 0, 0, 1)) + END,
+    "sqnt-q22": PRE + head(0, [1]) + sqnt(22) + END,
+    "vqtb": PRE + head(0, [1]) + sqnt(1) + chunk("VQTB", bytes([3]) + varint(2) +
+            b"".join(svarint(v) for v in (1, -1, 0, 2097151, -2097151, 5)))
+            + chunk("BASE", single_symbol_octree(1, [1])) + END,
+    "vqtb-huge": PRE + head(0, [1]) + sqnt(1) + chunk("VQTB", bytes([3]) + varint(65536) + b"\x00" * 9) + END,
+    "varint-long": PRE + chunk("HEAD", bytes([0, 0]) + b"\x81\x80\x80\x80\x80\x80\x80\x80\x80\x00") + END,
+    "info-only": PRE + head(0, [1]) + chunk("info", b"no equals\n=x\nk=v\n\xff\xfe=\n") + sqnt(1)
+                 + chunk("BASE", single_symbol_octree(1, [128])) + END,
+}
+for name, data in hand.items():
+    put("decode", "hand-" + name, data)
+    put("container", "hand-" + name, data)
+
+# --- base_layer: q, n - 1 (u24), BASE payload without its coder byte -----
+def base_input(q, n, bits):
+    return bytes([q - 1]) + struct.pack("<I", n - 1)[:3] + bits
+
+for name, data in sorted(streams.items()):
+    if not name.endswith("-noinfo"):
+        continue
+    parts = dict(chunks(data))
+    q = parts["SQNT"][0]
+    h = parts["HEAD"]
+    n, shift, i = 0, 0, 3
+    while True:
+        n |= (h[i] & 0x7F) << shift
+        shift += 7
+        if not h[i] & 0x80:
+            break
+        i += 1
+    put("base_layer", name, base_input(q, n, parts["BASE"][1:]))
+    # The same stream declared one point short and one point long.
+    if name.startswith("ball40"):
+        put("base_layer", name + "-n-1", base_input(q, n - 1, parts["BASE"][1:]))
+        put("base_layer", name + "-n+1", base_input(q, n + 1, parts["BASE"][1:]))
+put("base_layer", "single-full-q3", base_input(3, 512, single_symbol_octree(3, [255] * 3)[1:]))
+put("base_layer", "single-chain-q21", base_input(21, 1, single_symbol_octree(21, [1] * 21)[1:]))
+put("base_layer", "empty-q1", base_input(1, 1, b""))
+
+# --- huffman: alphabet - 1 (u16), then a table and symbols ---------------
+def huff_input(alphabet, bits):
+    return struct.pack("<H", alphabet - 1) + bits
+
+for name in ("ball40-q12-noinfo", "torus500-q12-noinfo", "lattice64-q2-noinfo"):
+    base = dict(chunks(streams[name]))["BASE"][1:]
+    put("huffman", name, huff_input(256, base[:512]))
+b = Bits(); b.put(1, 1); b.put(5, 3)
+put("huffman", "single-a8", huff_input(8, b.bytes()))
+b = Bits(); b.put(1, 1); b.put(9, 4)
+put("huffman", "single-out-of-range", huff_input(9, b.bytes()))
+b = Bits(); b.put(0, 1); b.put(1, 4); b.put(1, 4); b.put(0b0110, 4)
+put("huffman", "two-symbols", huff_input(2, b.bytes()))
+b = Bits(); b.put(0, 1)
+for l in (2, 1, 3, 3):
+    b.put(l, 4)
+for code, n in ((0b10, 2), (0b0, 1), (0b110, 3), (0b111, 3)):
+    b.put(code, n)
+put("huffman", "spec-example", huff_input(4, b.bytes()))
+b = Bits(); b.put(0, 1); b.put(0, 4); b.ue(9); b.put(1, 4); b.put(0, 4); b.ue(300); b.put(1, 4)
+put("huffman", "zero-runs", huff_input(312, b.bytes()))
+b = Bits(); b.put(0, 1)
+for l in list(range(1, 15)) + [15, 15]:              # Kraft sum exactly 2^15
+    b.put(l, 4)
+b.put(0xFFFF, 16); b.put(0xFFFF, 16); b.put(0b1110, 4)
+put("huffman", "long-codes", huff_input(16, b.bytes()))
+b = Bits(); b.put(0, 1); b.put(0, 4); b.put(0, 31); b.put(1, 1)
+put("huffman", "ue-31-zeros", huff_input(65536, b.bytes()))
+
+# --- roundtrip: q - 1, flags, seed, then 12 bytes per point --------------
+def rt(q, flags, seed, coords, fmt):
+    return bytes([q - 1, flags, seed]) + b"".join(struct.pack("<3" + fmt, *c) for c in coords)
+
+import random
+rnd = random.Random(5)
+ints = [(rnd.randrange(-1000, 1000), rnd.randrange(-1000, 1000), rnd.randrange(-1000, 1000)) for _ in range(200)]
+for q in (1, 2, 12, 21):
+    put("roundtrip", f"ints-q{q}", rt(q, 0x04 | 3, q, ints, "i"))            # mode 0, info, auto kind
+    put("roundtrip", f"small-q{q}", rt(q, 0x10 | 1, q, [(x << 20, y << 20, z << 20) for x, y, z in ints[:60]], "i"))
+floats = [(rnd.uniform(-1, 1), rnd.uniform(-1e3, 1e3), rnd.uniform(0, 1e-3)) for _ in range(100)]
+put("roundtrip", "floats-q12", rt(12, 0x08 | 0x04 | 2, 1, floats, "f"))
+put("roundtrip", "floats-nan", rt(12, 0x08, 1, floats[:5] + [(float("nan"), 0, 0)], "f"))
+put("roundtrip", "floats-inf", rt(12, 0x08, 1, [(float("inf"), 0, 0)] + floats[:5], "f"))
+put("roundtrip", "floats-tiny", rt(21, 0x08, 1, [(1e-45, 0, 0), (0, 0, 0), (-1e-45, 1e-45, 0)], "f"))
+put("roundtrip", "floats-huge", rt(21, 0x08, 1, [(3.4e38, -3.4e38, 0), (-3.4e38, 3.4e38, 1)], "f"))
+half = [(i, 2 * i + 1, 3 * i) for i in range(0, 1 << 12, 97)]                      # multiples of 2^-30
+put("roundtrip", "halves-q2", rt(2, 0x18, 3, half, "i"))
+put("roundtrip", "one-point", rt(5, 0x04, 0, [(7, 7, 7)], "i"))
+put("roundtrip", "duplicates", rt(3, 0x00, 9, [(1, 2, 3)] * 20 + [(4, 5, 6)] * 3, "i"))
+put("roundtrip", "no-points", bytes([11, 0, 0]))
+put("roundtrip", "extremes", rt(21, 0x03, 4, [(-2**31, -2**31, -2**31), (2**31 - 1, 2**31 - 1, 2**31 - 1), (0, 0, 0)], "i"))
+EOF
+
+du -sh "$CORPUS"
+for d in "$CORPUS"/*; do echo "$(basename "$d"): $(ls "$d" | wc -l) files"; done

@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+//
+// The canonical Delaunay tetrahedralization of a set of grid points
+// (spec/delaunay.md). This is the one interface through which the codec
+// reaches a Delaunay code; the rest of libhmc never sees the backend.
+//
+// The result is a function of the point set alone: the Delaunay
+// tetrahedralization whose ties (five or more cospherical points, four or
+// more coplanar points on the convex hull) are broken by the symbolic
+// perturbation of spec/delaunay.md section 3, keyed on each point's index in
+// canonical order. Equivalently: the Delaunay subdivision, with each cell
+// (a convex polytope inscribed in an empty sphere) triangulated by pulling
+// its vertices in canonical order.
+//
+// Backend. The tetrahedra are computed by TetGen 1.5 (tetgen_backend.cpp,
+// the only file that includes tetgen.h), which implements exactly this
+// perturbation. Whatever the backend, delaunay() verifies its output with
+// the exact predicates of predicates.hpp before returning it (see
+// certificate_error()), so a backend defect can never leak into decoded
+// output: it surfaces as Status::internal_error instead.
+//
+// Cost (informative, one core of the reference machine): about 1.2 s per
+// million points in total, of which the verification and adjacency take
+// roughly a tenth. Calls are serialized (TetGen keeps global state).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "hmc/codec.hpp"
+
+namespace hmc::detail {
+
+/// "No tetrahedron": the neighbour across a convex-hull face.
+inline constexpr std::uint32_t kNoTet = 0xFFFFFFFFu;
+
+/// Local face k of a tetrahedron is the face opposite its vertex k. Its
+/// vertices, listed by local position in this order, are oriented outward:
+/// they appear counter-clockwise seen from outside the tetrahedron, so
+/// orient3d(face..., opposite vertex) < 0.
+inline constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+struct Tetrahedralization {
+  /// Indices into the input points. Canonical form (spec/delaunay.md §5):
+  /// tets[t][0] < tets[t][1] are the two smallest indices of the
+  /// tetrahedron; the other two follow in the order that makes
+  /// orient3d(p[t0], p[t1], p[t2], p[t3]) > 0. The list is sorted
+  /// lexicographically by (t0, t1, t2, t3), without duplicates.
+  std::vector<std::array<std::uint32_t, 4>> tets;
+
+  /// neighbors[t][k]: the tetrahedron across local face k of tets[t] (the
+  /// face opposite tets[t][k]), or kNoTet when that face lies on the convex
+  /// hull. Informative convenience; derived from `tets` alone.
+  std::vector<std::array<std::uint32_t, 4>> neighbors;
+};
+
+/// The canonical Delaunay tetrahedralization of `points`, which must be
+/// distinct grid points (coordinates below 2^21) in canonical order
+/// (ascending x, then y, then z); fails with internal_error otherwise.
+/// Fewer than 4 points, or all points coplanar: no tetrahedra. Otherwise
+/// every point is a vertex of some tetrahedron and the tetrahedra tile the
+/// convex hull. Errors (as StreamError): out_of_memory, internal_error.
+Tetrahedralization delaunay(const std::vector<GridPoint>& points);
+
+/// Verifies that `tets` (any vertex order per tetrahedron, any list order)
+/// is the canonical Delaunay tetrahedralization of `points` (spec/
+/// delaunay.md §6): every tetrahedron positively oriented, every face
+/// shared by at most two tetrahedra lying on opposite sides of it, the hull
+/// faces a closed, locally convex surface of genus 0, every point a vertex,
+/// and every interior face locally Delaunay under the perturbed in-sphere
+/// test. Returns an empty string when all checks pass, else a description
+/// of the first failure. Linear time.
+std::string certificate_error(const std::vector<GridPoint>& points,
+                              const std::vector<std::array<std::uint32_t, 4>>& tets);
+
+/// Puts one tetrahedron in canonical vertex order (see Tetrahedralization);
+/// returns false if it is flat (orient3d == 0).
+bool canonicalize_tet(const std::vector<GridPoint>& points, std::array<std::uint32_t, 4>& tet);
+
+namespace backend {
+/// Implemented by exactly one backend (tetgen_backend.cpp). Fills `tets`
+/// in any order and any vertex order, and optionally `neighbors` (same
+/// order; neighbors[t][k] across the face opposite tets[t][k], kNoTet on the
+/// hull; left empty if the backend has no adjacency to offer: it is then
+/// built here). Both are verified before use. `attempt` (0, 1, 2, ...)
+/// selects a different point-insertion order on retries; returns false when
+/// there is no further attempt to offer. Only called with at least 4 points
+/// not all coplanar. An empty `tets` means the attempt failed.
+bool tetrahedralize(const std::vector<GridPoint>& points, int attempt,
+                    std::vector<std::array<std::uint32_t, 4>>& tets,
+                    std::vector<std::array<std::uint32_t, 4>>& neighbors);
+}  // namespace backend
+
+}  // namespace hmc::detail

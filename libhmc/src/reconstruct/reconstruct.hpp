@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Normative reconstruction of connectivity from a level's points (spec
+// "Reconstruction"): every Delaunay tetrahedron is labelled inside or
+// outside by a rule driven by the level's side information; a surface is
+// the oriented interface between the two labels, a volume the inside
+// tetrahedra. All decisions use exact integer arithmetic.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "delaunay/delaunay.hpp"
+#include "hmc/codec.hpp"
+
+namespace hmc::detail {
+
+/// Side information that drives the rule (the RCON chunk's content).
+struct ReconParams {
+  /// Rank k of the local scale: s_v is the k-th smallest squared length of
+  /// the Delaunay edges at v (the largest if v has fewer than k).
+  std::uint32_t scale_rank = 6;
+  /// Alpha classes as multipliers of s_v in units of 1/256: vertex v
+  /// admits edges with 256·d² <= s_v · multipliers[class(v)].
+  std::vector<std::uint32_t> multipliers{512};
+  /// Class of each vertex (canonical order); empty means all class 0.
+  std::vector<std::uint8_t> vertex_class;
+  /// Apply the peeling step.
+  bool peel = true;
+  /// Border vertices of an open surface (sorted, distinct).
+  std::vector<std::uint32_t> border;
+  /// Tetrahedra whose label is inverted after the rule (sorted, distinct).
+  std::vector<std::uint32_t> toggles;
+};
+
+struct Reconstruction {
+  std::vector<std::uint8_t> inside;          ///< per tetrahedron of the DT: 1 inside
+  std::vector<Triangle> triangles;           ///< surface kind: oriented outward, canonical order
+  std::vector<Tetrahedron> tetrahedra;       ///< volume kind: inside tetrahedra, canonical
+};
+
+/// The local scale s_v of every vertex (squared grid units).
+std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                       std::uint32_t rank);
+
+/// The labels of the rule before toggles (flood from the hull through
+/// non-candidate faces, then peeling).
+std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                      const std::vector<std::uint64_t>& scale, const ReconParams& p);
+
+/// Surface or volume from final labels (toggles applied by the caller).
+Reconstruction extract(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
+                       const std::vector<std::uint8_t>& inside, const std::vector<std::uint32_t>& border);
+
+/// The whole normative rule.
+Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
+                           const ReconParams& p);
+
+/// Exact comparison of triangle circumradii: sign of R²(a) − R²(b).
+int compare_circumradius(const std::vector<GridPoint>& points, const std::array<std::uint32_t, 3>& a,
+                         const std::array<std::uint32_t, 3>& b);
+
+}  // namespace hmc::detail

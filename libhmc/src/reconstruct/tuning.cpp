@@ -1,0 +1,277 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "reconstruct/tuning.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "entropy/huffman.hpp"
+#include "reconstruct/winding.hpp"
+
+namespace hmc::detail {
+
+namespace {
+
+using Face = std::array<std::uint32_t, 3>;
+
+Face sorted(Face f) {
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {
+  std::uint64_t s = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::int64_t d = static_cast<std::int64_t>(a[i]) - static_cast<std::int64_t>(b[i]);
+    s += static_cast<std::uint64_t>(d * d);
+  }
+  return s;
+}
+
+// Bits to send a sorted list of `count` indices out of `range` as gaps.
+std::uint64_t list_bits(std::uint64_t count, std::uint64_t range) {
+  if (count == 0) return 8;
+  const double gap = static_cast<double>(range) / static_cast<double>(count);
+  return static_cast<std::uint64_t>(static_cast<double>(count) * (std::log2(gap + 1) + 2.0)) + 8;
+}
+
+double bbox_diagonal(const std::vector<GridPoint>& points) {
+  double s = 0;
+  for (int a = 0; a < 3; ++a) {
+    std::uint32_t lo = ~0u, hi = 0;
+    for (const auto& p : points) lo = std::min(lo, p[a]), hi = std::max(hi, p[a]);
+    s += static_cast<double>(hi - lo) * static_cast<double>(hi - lo);
+  }
+  return std::sqrt(s);
+}
+
+// Smallest height of a tetrahedron (3V over its largest face area): how far
+// the surface moves when its label flips.
+double height(const std::vector<GridPoint>& points, const std::array<std::uint32_t, 4>& t) {
+  Vec3 p[4];
+  for (int i = 0; i < 4; ++i) p[i] = {double(points[t[i]][0]), double(points[t[i]][1]), double(points[t[i]][2])};
+  auto sub = [](const Vec3& a, const Vec3& b) { return Vec3{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+  auto cross = [](const Vec3& a, const Vec3& b) {
+    return Vec3{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  };
+  auto norm = [](const Vec3& a) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); };
+  const Vec3 n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+  const Vec3 d = sub(p[3], p[0]);
+  const double six_v = std::abs(n[0] * d[0] + n[1] * d[1] + n[2] * d[2]);
+  double max_area2 = 0;  // twice the area
+  for (const auto& f : kFaceVertices) max_area2 = std::max(max_area2, norm(cross(sub(p[f[1]], p[f[0]]), sub(p[f[2]], p[f[0]]))));
+  return max_area2 > 0 ? six_v / max_area2 : 0;
+}
+
+// Vertices on the interface between inside and outside tetrahedra.
+std::vector<std::uint8_t> interface_vertices(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                                             std::size_t n) {
+  std::vector<std::uint8_t> on(n, 0);
+  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+    if (!inside[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && inside[u]) continue;
+      for (int i = 0; i < 3; ++i) on[dt.tets[t][kFaceVertices[k][i]]] = 1;
+    }
+  }
+  return on;
+}
+
+// Vertices where the interface of `inside` is unsound: a vertex of `want`
+// missing from it, or an endpoint of an edge with other than two faces.
+std::vector<std::uint8_t> interface_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                                            const std::vector<std::uint8_t>& want) {
+  const std::size_t n = want.size();
+  std::vector<std::uint8_t> bad(n, 0);
+  const auto have = interface_vertices(dt, inside, n);
+  for (std::size_t v = 0; v < n; ++v) bad[v] = want[v] && !have[v];
+  std::vector<std::uint64_t> edges;
+  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+    if (!inside[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && inside[u]) continue;
+      for (int i = 0; i < 3; ++i) {
+        const std::uint64_t a = dt.tets[t][kFaceVertices[k][i]], b = dt.tets[t][kFaceVertices[k][(i + 1) % 3]];
+        edges.push_back((std::min(a, b) << 32) | std::max(a, b));
+      }
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i != 2) bad[edges[i] >> 32] = bad[edges[i] & 0xffffffffu] = 1;
+    i = j;
+  }
+  return bad;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                       const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
+                                       const std::vector<Triangle>& input_faces_on_points) {
+  const std::size_t nt = dt.tets.size();
+  WindingNumber wn(surface_points, surface);
+  std::vector<double> w(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    Vec3 c{0, 0, 0};
+    for (auto v : dt.tets[t])
+      for (int a = 0; a < 3; ++a) c[a] += 0.25 * points[v][a];
+    w[t] = std::abs(wn(c));
+  }
+  std::vector<std::uint8_t> label(nt);
+  std::vector<std::uint8_t> sure(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    label[t] = w[t] > 0.5;
+    sure[t] = w[t] < 0.25 || w[t] > 0.75;
+  }
+  // A tetrahedron whose centroid lies near the surface (flat ones on it):
+  // across an input face the label changes, across any other face it does
+  // not. Settle it by the votes of settled neighbours, a few rounds.
+  std::vector<Face> faces;
+  faces.reserve(input_faces_on_points.size());
+  for (const auto& f : input_faces_on_points) faces.push_back(sorted(f));
+  std::sort(faces.begin(), faces.end());
+  auto is_input = [&](const Face& f) { return std::binary_search(faces.begin(), faces.end(), sorted(f)); };
+  for (int round = 0; round < 8; ++round) {
+    bool changed = false;
+    for (std::size_t t = 0; t < nt; ++t) {
+      if (sure[t]) continue;
+      int in = 0, out = 0;
+      for (int k = 0; k < 4; ++k) {
+        const std::uint32_t u = dt.neighbors[t][k];
+        const Face f{dt.tets[t][kFaceVertices[k][0]], dt.tets[t][kFaceVertices[k][1]], dt.tets[t][kFaceVertices[k][2]]};
+        const bool cut = is_input(f);
+        if (u == kNoTet) {
+          (cut ? in : out) += 1;  // beyond the hull is outside
+        } else if (sure[u]) {
+          ((label[u] != 0) != cut ? in : out) += 1;
+        }
+      }
+      if (in != out && (in > 0 || out > 0)) {
+        label[t] = in > out;
+        sure[t] = 1;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  return label;
+}
+
+ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
+                 const std::vector<std::uint8_t>& truth, const std::vector<std::uint32_t>& border, Fidelity fidelity,
+                 TuningReport* report) {
+  const std::size_t n = points.size(), nt = dt.tets.size();
+  ReconParams best;
+  best.border = border;
+  if (nt == 0 || kind == Kind::points || truth.empty()) return best;
+
+  // need[v]: the longest edge of the true interface (surface) or of the true
+  // boundary faces (volume) at v; every such face must stay a candidate.
+  std::vector<std::uint64_t> need(n, 0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!truth[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && truth[u]) continue;
+      const auto& tet = dt.tets[t];
+      for (int i = 0; i < 3; ++i) {
+        const std::uint32_t a = tet[kFaceVertices[k][i]], b = tet[kFaceVertices[k][(i + 1) % 3]];
+        const std::uint64_t d = dist2(points[a], points[b]);
+        need[a] = std::max(need[a], d);
+        need[b] = std::max(need[b], d);
+      }
+    }
+  }
+
+  std::uint64_t best_bits = ~std::uint64_t{0};
+  std::uint64_t best_mismatch = 0;
+  const std::uint32_t ranks[] = {6, 10};
+  for (std::uint32_t rank : ranks) {
+    const auto scale = local_scale(points, dt, rank);
+    // Multiplier each vertex needs, in 1/256 units, capped to the table range.
+    std::vector<std::uint32_t> ratio(n, 1);
+    for (std::size_t v = 0; v < n; ++v) {
+      if (need[v] == 0 || scale[v] == 0) continue;
+      const std::uint64_t r = (256 * need[v] + scale[v] - 1) / scale[v];
+      ratio[v] = static_cast<std::uint32_t>(std::min<std::uint64_t>(std::max<std::uint64_t>(r, 1), 65535));
+    }
+    std::vector<std::uint32_t> sorted_ratio(ratio);
+    std::sort(sorted_ratio.begin(), sorted_ratio.end());
+    for (int classes : {1, 2, 4, 8, 16}) {
+      ReconParams p;
+      p.scale_rank = rank;
+      p.border = border;
+      // Class limits at quantiles of the needed ratios (the last one covers
+      // every vertex), so each class holds a similar share of vertices.
+      for (int c = 1; c <= classes; ++c) {
+        const std::size_t q = std::min(n - 1, (n * static_cast<std::size_t>(c)) / static_cast<std::size_t>(classes));
+        const std::uint32_t m = c == classes ? sorted_ratio.back() : sorted_ratio[q];
+        if (p.multipliers.empty() || m > p.multipliers.back()) p.multipliers.push_back(m);
+      }
+      p.multipliers.front() = std::max<std::uint32_t>(p.multipliers.front(), 1);
+      std::uint64_t class_bits = 0;
+      if (p.multipliers.size() > 1) {
+        p.vertex_class.resize(n);
+        std::vector<std::uint64_t> freq(p.multipliers.size(), 0);
+        for (std::size_t v = 0; v < n; ++v) {
+          const auto it = std::lower_bound(p.multipliers.begin(), p.multipliers.end(), ratio[v]);
+          p.vertex_class[v] = static_cast<std::uint8_t>(it - p.multipliers.begin());
+          ++freq[p.vertex_class[v]];
+        }
+        class_bits = HuffmanCode::from_frequencies(freq).cost(freq) + 8 * p.multipliers.size();
+      }
+      for (bool peel : {false, true}) {
+        p.peel = peel;
+        const auto labels = rule_labels(points, dt, scale, p);
+        std::uint64_t mism = 0;
+        for (std::size_t t = 0; t < nt; ++t) mism += labels[t] != truth[t];
+        const std::uint64_t bits = class_bits + list_bits(mism, nt);
+        if (bits < best_bits) {
+          best_bits = bits;
+          best_mismatch = mism;
+          best = p;
+        }
+      }
+    }
+  }
+  if (fidelity != Fidelity::rule) {
+    const double tolerance = fidelity == Fidelity::exact ? -1.0 : 1e-3 * bbox_diagonal(points);
+    auto labels = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
+    std::vector<std::uint8_t> toggled(nt, 0);
+    for (std::size_t t = 0; t < nt; ++t)
+      if (labels[t] != truth[t] && height(points, dt.tets[t]) > tolerance) toggled[t] = 1, labels[t] = truth[t];
+    // Flat flips are left to the rule only while the result stays as sound as
+    // the input's: every vertex the input puts on the surface stays on it and
+    // no edge becomes non-manifold. Correct the mismatches around any defect
+    // until none is left.
+    const auto want = interface_vertices(dt, truth, n);
+    for (int round = 0; round < 8; ++round) {
+      const auto defects = interface_defects(dt, labels, want);
+      bool any = false;
+      for (std::size_t t = 0; t < nt; ++t) {
+        if (labels[t] == truth[t]) continue;
+        for (auto v : dt.tets[t])
+          if (defects[v]) {
+            toggled[t] = 1;
+            labels[t] = truth[t];
+            any = true;
+            break;
+          }
+      }
+      if (!any) break;
+    }
+    for (std::size_t t = 0; t < nt; ++t)
+      if (toggled[t]) best.toggles.push_back(static_cast<std::uint32_t>(t));
+  }
+  if (report) {
+    report->mismatches_before_toggles = best_mismatch;
+    report->side_bits_estimate = best_bits;
+  }
+  return best;
+}
+
+}  // namespace hmc::detail

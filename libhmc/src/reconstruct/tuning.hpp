@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Encoder side of reconstruction (non-normative): what the input says each
+// Delaunay tetrahedron should be (inside or outside), and the side
+// information that makes the normative rule reproduce it at least cost.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "delaunay/delaunay.hpp"
+#include "hmc/codec.hpp"
+#include "reconstruct/reconstruct.hpp"
+
+namespace hmc::detail {
+
+/// The input's connectivity on the quantization grid: indices into the
+/// level's canonical points. Degenerate elements (merged vertices) dropped.
+struct GridMesh {
+  std::vector<Triangle> triangles;
+  std::vector<Tetrahedron> tetrahedra;
+};
+
+/// Inside/outside label of every tetrahedron of `dt` according to the input:
+/// the generalized winding number of its centroid with respect to the input
+/// surface (for volumes, the boundary of the input tetrahedra), with flat
+/// tetrahedra on the surface settled by which of their faces are input
+/// faces. `surface` is evaluated at `surface_points` (grid units), which may
+/// be a finer level's points than the tetrahedralized ones.
+std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                       const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
+                                       const std::vector<Triangle>& input_faces_on_points);
+
+/// What tuning chose and what it costs.
+struct TuningReport {
+  std::uint64_t mismatches_before_toggles = 0;
+  std::uint64_t side_bits_estimate = 0;
+};
+
+/// Side information for `truth`: alpha classes, peeling, the border list,
+/// and toggles for the labels the rule still gets wrong: all of them
+/// (Fidelity::exact), all but flat tetrahedra thinner than 0.1% of the
+/// bounding-box diagonal (Fidelity::shape), or none (Fidelity::rule).
+/// An empty `truth` (input without connectivity) gives default parameters.
+ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
+                 const std::vector<std::uint8_t>& truth, const std::vector<std::uint32_t>& border, Fidelity fidelity,
+                 TuningReport* report = nullptr);
+
+}  // namespace hmc::detail

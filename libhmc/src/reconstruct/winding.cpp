@@ -1,0 +1,127 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "reconstruct/winding.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace hmc::detail {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// A cluster whose bounding sphere is seen from farther than this many radii
+// is replaced by its dipole; the error is then well below what the 1/2
+// threshold of the inside test needs.
+constexpr double kFarRatio = 2.5;
+constexpr std::uint32_t kLeafSize = 8;
+
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+
+// Solid angle of triangle abc seen from q (Van Oosterom & Strackee), signed.
+double solid_angle(const std::array<Vec3, 3>& t, const Vec3& q) {
+  const Vec3 a = sub(t[0], q), b = sub(t[1], q), c = sub(t[2], q);
+  const double la = norm(a), lb = norm(b), lc = norm(c);
+  const double det = dot(a, cross(b, c));
+  const double den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+  return 2 * std::atan2(det, den);
+}
+
+}  // namespace
+
+WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles) {
+  tri_.reserve(triangles.size());
+  for (const auto& t : triangles) tri_.push_back({points[t[0]], points[t[1]], points[t[2]]});
+  order_.resize(tri_.size());
+  for (std::uint32_t i = 0; i < order_.size(); ++i) order_[i] = i;
+  nodes_.reserve(2 * tri_.size() / kLeafSize + 2);
+  nodes_.push_back({});  // index 0 is never a child, so left == 0 marks a leaf
+  if (!tri_.empty()) build(0, static_cast<std::uint32_t>(tri_.size()));
+}
+
+std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
+  const auto id = static_cast<std::uint32_t>(nodes_.size());
+  nodes_.push_back({});
+  Node n;
+  n.begin = begin;
+  n.end = end;
+  double total = 0;
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (std::uint32_t i = begin; i < end; ++i) {
+    const auto& t = tri_[order_[i]];
+    const Vec3 av = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    const double w = 0.5 * norm(av);
+    for (int a = 0; a < 3; ++a) {
+      n.area[a] += 0.5 * av[a];
+      n.centre[a] += w * (t[0][a] + t[1][a] + t[2][a]) / 3;
+      for (const auto& v : t) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+    }
+    total += w;
+  }
+  for (int a = 0; a < 3; ++a) n.centre[a] = total > 0 ? n.centre[a] / total : 0.5 * (lo[a] + hi[a]);
+  for (std::uint32_t i = begin; i < end; ++i)
+    for (const auto& v : tri_[order_[i]]) n.radius = std::max(n.radius, norm(sub(v, n.centre)));
+  if (end - begin > kLeafSize) {
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+    const std::uint32_t mid = begin + (end - begin) / 2;
+    auto key = [&](std::uint32_t i) { return tri_[i][0][axis] + tri_[i][1][axis] + tri_[i][2][axis]; };
+    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                     [&](std::uint32_t x, std::uint32_t y) { return key(x) < key(y); });
+    n.left = build(begin, mid);
+    n.right = build(mid, end);
+  }
+  nodes_[id] = n;
+  return id;
+}
+
+double WindingNumber::query(std::uint32_t id, const Vec3& q) const {
+  const Node& n = nodes_[id];
+  const Vec3 d = sub(n.centre, q);
+  const double dist = norm(d);
+  if (dist > kFarRatio * n.radius && dist > 0) return dot(n.area, d) / (dist * dist * dist);
+  if (n.left == 0) {
+    double s = 0;
+    for (std::uint32_t i = n.begin; i < n.end; ++i) s += solid_angle(tri_[order_[i]], q);
+    return s;
+  }
+  return query(n.left, q) + query(n.right, q);
+}
+
+double WindingNumber::operator()(const Vec3& q) const {
+  if (tri_.empty()) return 0;
+  return query(1, q) / (4 * kPi);
+}
+
+std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std::vector<Tetrahedron>& tets) {
+  std::map<std::array<std::uint32_t, 3>, std::pair<int, Triangle>> faces;
+  for (const auto& t : tets) {
+    const Vec3 u = sub(points[t[1]], points[t[0]]), v = sub(points[t[2]], points[t[0]]),
+               w = sub(points[t[3]], points[t[0]]);
+    const bool positive = dot(u, cross(v, w)) > 0;
+    // Faces opposite each vertex, counter-clockwise from outside for a
+    // positively oriented tetrahedron; reversed otherwise.
+    const int fv[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    for (const auto& f : fv) {
+      Triangle tri{t[f[0]], t[f[1]], t[f[2]]};
+      if (!positive) std::swap(tri[1], tri[2]);
+      std::array<std::uint32_t, 3> key{tri[0], tri[1], tri[2]};
+      std::sort(key.begin(), key.end());
+      auto& e = faces[key];
+      ++e.first;
+      e.second = tri;
+    }
+  }
+  std::vector<Triangle> out;
+  for (const auto& [k, e] : faces)
+    if (e.first == 1) out.push_back(e.second);
+  return out;
+}
+
+}  // namespace hmc::detail

@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Generalized winding numbers of query points with respect to a triangle
+// soup (encoder side, non-normative): the encoder uses them to tell which
+// Delaunay tetrahedra lie inside the input surface or volume. Far clusters
+// of triangles are approximated by their area-weighted dipole, near ones
+// summed exactly, so a query costs O(log F) for F triangles.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "hmc/mesh.hpp"
+
+namespace hmc::detail {
+
+class WindingNumber {
+ public:
+  /// `triangles` index `points`; orientation gives the sign (counter-
+  /// clockwise seen from outside: +1 inside a closed surface).
+  WindingNumber(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles);
+  /// Winding number at q (1 inside, 0 outside a closed oriented surface).
+  double operator()(const Vec3& q) const;
+
+ private:
+  struct Node {
+    Vec3 centre{};           // area-weighted centroid
+    Vec3 area{};             // sum of area vectors (half cross products)
+    double radius = 0;       // bounds every triangle vertex around centre
+    std::uint32_t begin = 0, end = 0;  // range in order_ (leaf) ...
+    std::uint32_t left = 0, right = 0; // ... or children (left != 0)
+  };
+  std::uint32_t build(std::uint32_t begin, std::uint32_t end);
+  double query(std::uint32_t node, const Vec3& q) const;
+
+  std::vector<std::array<Vec3, 3>> tri_;
+  std::vector<std::uint32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+/// Oriented boundary faces of a tetrahedral mesh (faces used by exactly one
+/// tetrahedron), counter-clockwise seen from outside whatever the
+/// orientation of the tetrahedra.
+std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std::vector<Tetrahedron>& tets);
+
+}  // namespace hmc::detail

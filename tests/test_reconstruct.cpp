@@ -1,0 +1,352 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Reconstruction from vertices: surfaces and volumes rebuilt by the
+// decoder, checked for soundness (closed, manifold, oriented, every vertex
+// used) and for fidelity to the input; RCON syntax errors.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include "codec/format.hpp"
+#include "container/container.hpp"
+#include "delaunay/delaunay.hpp"
+#include "delaunay/predicates.hpp"
+#include "hmc/codec.hpp"
+#include "reconstruct/reconstruct.hpp"
+#include "samples.hpp"
+#include "util/bytes.hpp"
+
+using namespace hmc;
+using namespace hmc::detail;
+
+namespace {
+
+Decoded roundtrip(const Mesh& m, Fidelity f, Encoded* enc_out = nullptr, int bits = 12) {
+  EncodeOptions o;
+  o.bits = bits;
+  o.fidelity = f;
+  auto e = encode(m, o);
+  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  auto d = decode(e.value().bytes.data(), e.value().bytes.size());
+  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  // The encoder predicts exactly what the decoder rebuilds.
+  CHECK(d.value().finest().triangles == e.value().triangles);
+  CHECK(d.value().finest().tetrahedra == e.value().tetrahedra);
+  if (enc_out) *enc_out = std::move(e).value();
+  return std::move(d).value();
+}
+
+struct SurfaceCheck {
+  std::size_t border_edges = 0, nonmanifold_edges = 0, misoriented_edges = 0;
+  long euler = 0;
+  std::size_t vertices_used = 0;
+};
+
+// Edge counts of a triangle list: a closed oriented manifold uses every
+// directed edge once and its reverse once.
+SurfaceCheck check_surface(const std::vector<Triangle>& tris) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  std::set<std::uint32_t> verts;
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) {
+      ++directed[{t[k], t[(k + 1) % 3]}];
+      verts.insert(t[k]);
+    }
+  SurfaceCheck c;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> undirected;
+  for (const auto& [e, n] : directed) {
+    const auto rev = directed.find({e.second, e.first});
+    const int m = rev == directed.end() ? 0 : rev->second;
+    if (n > 1) ++c.misoriented_edges;
+    if (e.first < e.second || m == 0) {
+      undirected.insert({std::min(e.first, e.second), std::max(e.first, e.second)});
+      if (n + m == 1) ++c.border_edges;
+      if (n + m > 2) ++c.nonmanifold_edges;
+    }
+  }
+  c.vertices_used = verts.size();
+  c.euler = static_cast<long>(verts.size()) - static_cast<long>(undirected.size()) + static_cast<long>(tris.size());
+  return c;
+}
+
+std::set<std::array<std::uint32_t, 3>> sorted_faces(const std::vector<Triangle>& tris) {
+  std::set<std::array<std::uint32_t, 3>> s;
+  for (auto t : tris) {
+    std::sort(t.begin(), t.end());
+    s.insert(t);
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("closed surfaces come back closed, manifold, oriented, with their genus") {
+  struct Case {
+    const char* name;
+    Mesh mesh;
+    long euler;
+  };
+  const std::vector<Case> cases = {
+      {"sphere", samples::uv_sphere(24, 48), 2},
+      {"torus", samples::torus(64, 24), 0},
+      {"thin torus", samples::torus(90, 16, 1.0, 0.12), 0},
+  };
+  for (const auto& c : cases)
+    for (Fidelity f : {Fidelity::shape, Fidelity::exact}) {
+      CAPTURE(c.name);
+      CAPTURE(static_cast<int>(f));
+      const auto d = roundtrip(c.mesh, f);
+      const auto& lvl = d.finest();
+      const auto s = check_surface(lvl.triangles);
+      CHECK(s.border_edges == 0);
+      CHECK(s.nonmanifold_edges == 0);
+      CHECK(s.misoriented_edges == 0);
+      CHECK(s.euler == c.euler);
+      CHECK(s.vertices_used == lvl.points.size());
+    }
+}
+
+TEST_CASE("triangles face outward and are Delaunay faces") {
+  const Mesh m = samples::uv_sphere(16, 32);
+  const auto d = roundtrip(m, Fidelity::shape);
+  const auto& lvl = d.finest();
+  const auto dt = delaunay(lvl.points);
+  std::set<std::array<std::uint32_t, 3>> faces;
+  for (const auto& t : dt.tets)
+    for (const auto& f : kFaceVertices) {
+      std::array<std::uint32_t, 3> x{t[f[0]], t[f[1]], t[f[2]]};
+      std::sort(x.begin(), x.end());
+      faces.insert(x);
+    }
+  // The centre of the sphere's grid box is inside: every outward triangle
+  // has it on its negative side.
+  GridPoint lo = lvl.points[0], hi = lvl.points[0];
+  for (const auto& p : lvl.points)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  auto orient = [&](const Triangle& t) {
+    // Exact orientation of the centre (doubled to stay on the grid) against the triangle.
+    __extension__ typedef __int128 I;
+    I a[3], b[3], c[3];
+    for (int i = 0; i < 3; ++i) {
+      const I ctr = static_cast<I>(lo[i]) + hi[i];
+      a[i] = 2 * static_cast<I>(lvl.points[t[0]][i]) - ctr;
+      b[i] = 2 * static_cast<I>(lvl.points[t[1]][i]) - ctr;
+      c[i] = 2 * static_cast<I>(lvl.points[t[2]][i]) - ctr;
+    }
+    const I det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+    return det > 0 ? 1 : det < 0 ? -1 : 0;
+  };
+  for (const auto& t : lvl.triangles) {
+    std::array<std::uint32_t, 3> x{t[0], t[1], t[2]};
+    std::sort(x.begin(), x.end());
+    CHECK(faces.count(x) == 1);
+    // Seen from the centre the outward triangle turns clockwise:
+    // orient3d(a, b, c, centre) has the sign of det(a-o, b-o, c-o).
+    CHECK(orient(t) > 0);
+  }
+  CHECK(std::is_sorted(lvl.triangles.begin(), lvl.triangles.end()));
+}
+
+TEST_CASE("exact fidelity reproduces every input triangle that is a Delaunay face") {
+  Encoded e;
+  const Mesh m = samples::torus(48, 20);
+  const auto d = roundtrip(m, Fidelity::exact, &e);
+  const auto& lvl = d.finest();
+  const auto dt = delaunay(lvl.points);
+  std::set<std::array<std::uint32_t, 3>> dt_faces;
+  for (const auto& t : dt.tets)
+    for (const auto& f : kFaceVertices) {
+      std::array<std::uint32_t, 3> x{t[f[0]], t[f[1]], t[f[2]]};
+      std::sort(x.begin(), x.end());
+      dt_faces.insert(x);
+    }
+  // Map input vertices to decoded indices by nearest dequantized point
+  // (the torus has no duplicates at q = 12).
+  std::vector<std::uint32_t> idx(m.points.size());
+  for (std::size_t i = 0; i < m.points.size(); ++i) {
+    double best = 1e300;
+    for (std::uint32_t j = 0; j < lvl.points.size(); ++j) {
+      const auto p = d.quantizer.dequantize(lvl.points[j]);
+      const double dd = (p[0] - m.points[i][0]) * (p[0] - m.points[i][0]) + (p[1] - m.points[i][1]) * (p[1] - m.points[i][1]) +
+                        (p[2] - m.points[i][2]) * (p[2] - m.points[i][2]);
+      if (dd < best) best = dd, idx[i] = j;
+    }
+  }
+  const auto out = sorted_faces(lvl.triangles);
+  std::size_t in_dt = 0, reproduced = 0;
+  for (const auto& t : m.triangles) {
+    std::array<std::uint32_t, 3> x{idx[t[0]], idx[t[1]], idx[t[2]]};
+    std::sort(x.begin(), x.end());
+    if (!dt_faces.count(x)) continue;
+    ++in_dt;
+    reproduced += out.count(x);
+  }
+  CHECK(in_dt > m.triangles.size() / 2);
+  CHECK(reproduced == in_dt);
+  CHECK(e.report.levels[0].label_corrections > 0);
+}
+
+TEST_CASE("a volume comes back as the input's solid") {
+  // An L-shaped block of lattice points; the input tetrahedra are the
+  // Delaunay tetrahedra inside the L (a non-convex solid).
+  Mesh m;
+  for (int x = 0; x < 8; ++x)
+    for (int y = 0; y < 8; ++y)
+      for (int z = 0; z < 4; ++z)
+        if (x <= 3 || y <= 3) m.points.push_back({double(x), double(y), double(z)});
+  std::vector<GridPoint> g;
+  for (const auto& p : m.points) g.push_back({std::uint32_t(p[0]), std::uint32_t(p[1]), std::uint32_t(p[2])});
+  std::sort(g.begin(), g.end());
+  const auto dt = delaunay(g);
+  std::map<GridPoint, std::uint32_t> index_of;
+  for (std::uint32_t i = 0; i < m.points.size(); ++i)
+    index_of[{std::uint32_t(m.points[i][0]), std::uint32_t(m.points[i][1]), std::uint32_t(m.points[i][2])}] = i;
+  double six_volume = 0;
+  for (const auto& t : dt.tets) {
+    double c[3] = {0, 0, 0};
+    for (auto v : t)
+      for (int a = 0; a < 3; ++a) c[a] += g[v][a] / 4.0;
+    if (c[0] > 3 && c[1] > 3) continue;  // in the notch
+    m.tetrahedra.push_back({index_of[g[t[0]]], index_of[g[t[1]]], index_of[g[t[2]]], index_of[g[t[3]]]});
+  }
+  // The L is [0,7]x[0,7] minus (3,7]x(3,7], area 49 - 16 = 33, height 3.
+  auto vol6 = [](const std::vector<Vec3>& p, const Tetrahedron& t) {
+    const Vec3 &a = p[t[0]], &b = p[t[1]], &c = p[t[2]], &d = p[t[3]];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
+                 w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    return std::abs(u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]));
+  };
+  for (const auto& t : m.tetrahedra) six_volume += vol6(m.points, t);
+  CHECK(six_volume == doctest::Approx(6.0 * 33 * 3));
+
+  for (Fidelity f : {Fidelity::shape, Fidelity::exact}) {
+    CAPTURE(static_cast<int>(f));
+    const auto d = roundtrip(m, f, nullptr, 3);  // extent 7 = 2^3 - 1: the lattice is the grid
+    CHECK(d.kind == Kind::volume);
+    const auto& lvl = d.finest();
+    std::vector<Vec3> pts;
+    for (const auto& p : lvl.points) pts.push_back({double(p[0]), double(p[1]), double(p[2])});
+    double out6 = 0;
+    for (const auto& t : lvl.tetrahedra) out6 += vol6(pts, t);
+    CHECK(out6 == doctest::Approx(6.0 * 33 * 3));
+    CHECK(lvl.triangles.empty());
+  }
+}
+
+TEST_CASE("points-only decoding skips reconstruction but keeps the points") {
+  Encoded e;
+  roundtrip(samples::uv_sphere(10, 20), Fidelity::shape, &e);
+  DecodeOptions o;
+  o.reconstruct = false;
+  auto d = decode(e.bytes.data(), e.bytes.size(), o);
+  REQUIRE(d.ok());
+  CHECK(d.value().finest().points == e.points);
+  CHECK(d.value().finest().triangles.empty());
+}
+
+namespace {
+
+struct Chunks {
+  std::vector<std::pair<ChunkType, std::vector<std::uint8_t>>> list;
+  std::vector<std::uint8_t> bytes() const {
+    ContainerWriter w;
+    for (const auto& [t, p] : list) w.chunk(t, p);
+    return w.finish();
+  }
+  std::size_t index(const ChunkType& t) const {
+    for (std::size_t i = 0; i < list.size(); ++i)
+      if (list[i].first == t) return i;
+    return list.size();
+  }
+};
+
+Chunks chunks_of(const std::vector<std::uint8_t>& b) {
+  auto v = parse_container(b.data(), b.size(), kEnd);
+  Chunks c;
+  for (const auto& ch : v.chunks) c.list.emplace_back(ch.type, std::vector<std::uint8_t>(ch.payload, ch.payload + ch.length));
+  return c;
+}
+
+Status status(const Chunks& c) {
+  const auto b = c.bytes();
+  return decode(b.data(), b.size()).status();
+}
+
+}  // namespace
+
+TEST_CASE("RCON syntax errors are bad_layer, misplaced RCON is bad_chunk") {
+  const auto e = encode(samples::uv_sphere(10, 20)).value();
+  const Chunks base = chunks_of(e.bytes);
+  const std::size_t r = base.index(kRecon);
+  REQUIRE(r < base.list.size());
+  REQUIRE(status(base) == Status::ok);
+  const std::uint64_t n = e.points.size();
+
+  auto with_recon = [&](const ReconParams& p) {
+    Chunks c = base;
+    c.list[r].second = write_recon(p);
+    return status(c);
+  };
+  ReconParams ok;
+  CHECK(with_recon(ok) == Status::ok);
+  {
+    Chunks c = base;
+    c.list[r].second[0] = 2;  // reserved flag
+    CHECK(status(c) == Status::bad_layer);
+    c = base;
+    c.list[r].second[1] = 0;  // scale rank 0
+    CHECK(status(c) == Status::bad_layer);
+    c = base;
+    c.list[r].second.push_back(0);
+    CHECK(status(c) == Status::bad_layer);
+  }
+  ReconParams p = ok;
+  p.multipliers = {300, 300};
+  p.vertex_class.assign(n, 0);
+  p.vertex_class[0] = 1;
+  CHECK(with_recon(p) == Status::bad_layer);  // not increasing
+  p.multipliers = {300, 600};
+  CHECK(with_recon(p) == Status::ok);
+  p = ok;
+  p.border = {static_cast<std::uint32_t>(n)};
+  CHECK(with_recon(p) == Status::bad_layer);  // border index out of range
+  p = ok;
+  p.toggles = {100000000};
+  CHECK(with_recon(p) == Status::bad_layer);  // no such tetrahedron
+  {
+    ByteWriter w;
+    w.u8(1), w.u8(6), w.varint(1), w.varint(512), w.varint(0), w.varint(1000);  // 1000 toggles, no bytes
+    Chunks c = base;
+    c.list[r].second = w.data();
+    CHECK(status(c) == Status::bad_layer);
+  }
+  {
+    Chunks c = base;
+    c.list.erase(c.list.begin() + static_cast<long>(r));
+    CHECK(status(c) == Status::bad_chunk);  // HEND before the level is complete
+    c = base;
+    c.list.insert(c.list.begin() + static_cast<long>(r), base.list[r]);
+    CHECK(status(c) == Status::bad_chunk);  // two RCON
+    c = base;
+    std::swap(c.list[r], c.list[r - 1]);
+    CHECK(status(c) == Status::bad_chunk);  // RCON before its layer
+  }
+  {
+    // Kind points has no RCON.
+    Chunks c = base;
+    c.list[0].second[0] = 0;
+    CHECK(status(c) == Status::bad_chunk);
+  }
+}
+
+TEST_CASE("a stream cut between the layer and its RCON has no complete level") {
+  const auto e = encode(samples::uv_sphere(10, 20)).value();
+  auto v = parse_container(e.bytes.data(), e.bytes.size(), kEnd);
+  std::size_t recon_at = 0;
+  for (const auto& c : v.chunks)
+    if (c.type == kRecon) recon_at = c.offset;
+  REQUIRE(recon_at > 0);
+  auto d = decode(e.bytes.data(), recon_at);
+  CHECK(d.status() == Status::truncated);
+}
