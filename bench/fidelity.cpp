@@ -14,12 +14,14 @@
 #include <set>
 #include <string>
 
+#include "codec/format.hpp"
 #include "delaunay/delaunay.hpp"
 #include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
 #include "quant/scalar_quantizer.hpp"
 #include "reconstruct/reconstruct.hpp"
 #include "reconstruct/tuning.hpp"
+#include "reconstruct/distance.hpp"
 #include "reconstruct/winding.hpp"
 
 using namespace hmc;
@@ -28,6 +30,7 @@ using namespace hmc::detail;
 namespace {
 
 using Face = std::array<std::uint32_t, 3>;
+double pct(std::size_t a, std::size_t b) { return 100.0 * static_cast<double>(a) / static_cast<double>(std::max<std::size_t>(b, 1)); }
 Face sorted3(Face f) {
   std::sort(f.begin(), f.end());
   return f;
@@ -37,105 +40,8 @@ Tetrahedron sorted4(Tetrahedron t) {
   return t;
 }
 
-// Point-to-triangle-set distance with an AABB tree (exact point-triangle
-// distance at the leaves).
-class Distance {
- public:
-  Distance(const std::vector<Vec3>& p, const std::vector<Face>& tris) : p_(p), tris_(tris), order_(tris.size()) {
-    std::iota(order_.begin(), order_.end(), 0u);
-    nodes_.reserve(tris.size() * 2 / 4 + 2);
-    if (!tris.empty()) build(0, static_cast<std::uint32_t>(tris.size()));
-  }
-  double operator()(const Vec3& q) const {
-    double best = 1e300;
-    if (!nodes_.empty()) search(0, q, best);
-    return std::sqrt(best);
-  }
-
- private:
-  struct Node {
-    Vec3 lo, hi;
-    std::uint32_t begin, end, left = 0, right = 0;
-  };
-  std::uint32_t build(std::uint32_t b, std::uint32_t e) {
-    const auto id = static_cast<std::uint32_t>(nodes_.size());
-    nodes_.push_back({});
-    Node n{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}, b, e};
-    for (std::uint32_t i = b; i < e; ++i)
-      for (auto v : tris_[order_[i]])
-        for (int a = 0; a < 3; ++a) n.lo[a] = std::min(n.lo[a], p_[v][a]), n.hi[a] = std::max(n.hi[a], p_[v][a]);
-    if (e - b > 4) {
-      int ax = 0;
-      for (int a = 1; a < 3; ++a)
-        if (n.hi[a] - n.lo[a] > n.hi[ax] - n.lo[ax]) ax = a;
-      const std::uint32_t m = b + (e - b) / 2;
-      auto key = [&](std::uint32_t t) { return p_[tris_[t][0]][ax] + p_[tris_[t][1]][ax] + p_[tris_[t][2]][ax]; };
-      std::nth_element(order_.begin() + b, order_.begin() + m, order_.begin() + e,
-                       [&](std::uint32_t x, std::uint32_t y) { return key(x) < key(y); });
-      n.left = build(b, m);
-      n.right = build(m, e);
-    }
-    nodes_[id] = n;
-    return id;
-  }
-  static double box2(const Node& n, const Vec3& q) {
-    double s = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double d = std::max({n.lo[a] - q[a], 0.0, q[a] - n.hi[a]});
-      s += d * d;
-    }
-    return s;
-  }
-  void search(std::uint32_t id, const Vec3& q, double& best) const {
-    const Node& n = nodes_[id];
-    if (box2(n, q) >= best) return;
-    if (n.left == 0 && n.right == 0) {
-      for (std::uint32_t i = n.begin; i < n.end; ++i) best = std::min(best, tri2(tris_[order_[i]], q));
-      return;
-    }
-    const bool l_first = box2(nodes_[n.left], q) < box2(nodes_[n.right], q);
-    search(l_first ? n.left : n.right, q, best);
-    search(l_first ? n.right : n.left, q, best);
-  }
-  // Squared distance from q to triangle (Ericson's region test).
-  double tri2(const Face& f, const Vec3& q) const {
-    auto sub = [](const Vec3& x, const Vec3& y) { return Vec3{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
-    auto dot = [](const Vec3& x, const Vec3& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
-    const Vec3 &a = p_[f[0]], &b = p_[f[1]], &c = p_[f[2]];
-    const Vec3 ab = sub(b, a), ac = sub(c, a), ap = sub(q, a);
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    auto at = [&](double s, double t) {
-      const Vec3 x{a[0] + s * ab[0] + t * ac[0], a[1] + s * ab[1] + t * ac[1], a[2] + s * ab[2] + t * ac[2]};
-      const Vec3 d = sub(q, x);
-      return dot(d, d);
-    };
-    if (d1 <= 0 && d2 <= 0) return at(0, 0);
-    const Vec3 bp = sub(q, b);
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0 && d4 <= d3) return at(1, 0);
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0) return at(d1 / (d1 - d3), 0);
-    const Vec3 cp = sub(q, c);
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0 && d5 <= d6) return at(0, 1);
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0) return at(0, d2 / (d2 - d6));
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-      const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-      return at(1 - w, w);
-    }
-    const double den = 1 / (va + vb + vc);
-    return at(vb * den, vc * den);
-  }
-  const std::vector<Vec3>& p_;
-  const std::vector<Face>& tris_;
-  std::vector<std::uint32_t> order_;
-  std::vector<Node> nodes_;
-};
-
 // One-sided max distance from surface A (sampled) to surface B.
-double one_sided(const std::vector<Vec3>& p, const std::vector<Face>& a, const Distance& to_b) {
+double one_sided(const std::vector<Vec3>& p, const std::vector<Face>& a, const SurfaceDistance& to_b) {
   double worst = 0;
   const double w[7][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, .5, 0}, {0, .5, .5}, {.5, 0, .5}, {1. / 3, 1. / 3, 1. / 3}};
   for (const auto& f : a)
@@ -249,7 +155,12 @@ int main(int argc, char** argv) {
     border.erase(std::unique(border.begin(), border.end()), border.end());
   }
   TuningReport rep;
-  const auto params = tune(pts, dt, kind, truth, border, fidelity, &rep);
+  TuneInput ti;
+  ti.truth = truth;
+  ti.border = border;
+  ti.surface_points = &gp;
+  ti.surface = &surface;
+  const auto params = tune(pts, dt, kind, ti, fidelity, &rep);
   const auto t3 = std::chrono::steady_clock::now();
   const auto rec = reconstruct(pts, dt, kind, params);
   const auto t4 = std::chrono::steady_clock::now();
@@ -273,10 +184,12 @@ int main(int argc, char** argv) {
   std::printf("{\"model\": \"%s\", \"kind\": \"%s\", \"fidelity\": \"%s\", \"points\": %zu, \"dt_tets\": %zu, ", argv[1],
               kind_name(kind), fidelity == Fidelity::rule ? "rule" : fidelity == Fidelity::exact ? "exact" : "shape",
               pts.size(), dt.tets.size());
-  std::printf("\"classes\": %zu, \"scale_rank\": %u, \"peel\": %s, \"toggles\": %zu, \"mismatches\": %llu, \"side_bits\": %llu, ",
+  const std::size_t rcon_bytes = write_recon(params).size() + kChunkOverhead;
+  std::printf("\"classes\": %zu, \"scale_rank\": %u, \"peel\": %s, \"toggles\": %zu, \"mismatches\": %llu, "
+              "\"rcon_bytes\": %zu, \"rcon_bits_per_point\": %.3f, ",
               params.multipliers.size(), params.scale_rank, params.peel ? "true" : "false", params.toggles.size(),
-              static_cast<unsigned long long>(rep.mismatches_before_toggles),
-              static_cast<unsigned long long>(rep.side_bits_estimate));
+              static_cast<unsigned long long>(rep.mismatches_before_toggles), rcon_bytes,
+              8.0 * static_cast<double>(rcon_bytes) / static_cast<double>(pts.size()));
   std::printf("\"seconds\": {\"delaunay\": %.3f, \"truth\": %.3f, \"tune\": %.3f, \"reconstruct\": %.3f}, ", secs(t0, t1),
               secs(t1, t2), secs(t2, t3), secs(t3, t4));
   if (kind == Kind::surface) {
@@ -291,11 +204,14 @@ int main(int argc, char** argv) {
     }
     for (const auto& f : out) extra += !in.count(f);
     std::vector<Face> outv(rec.triangles.begin(), rec.triangles.end());
-    Distance to_in(gp, in_tris), to_out(gp, outv);
-    const double h = std::max(one_sided(gp, outv, to_in), one_sided(gp, in_tris, to_out));
+    SurfaceDistance to_in(gp, in_tris), to_out(gp, outv);
+    const double h_out = one_sided(gp, outv, to_in), h_in = one_sided(gp, in_tris, to_out);
+    const double h = std::max(h_out, h_in);
+    std::printf("\"hausdorff_out_to_in_pct\": %.4f, \"hausdorff_in_to_out_pct\": %.4f, ", 100 * h_out / diag,
+                100 * h_in / diag);
     std::printf("\"input_triangles\": %zu, \"in_delaunay\": %zu, \"ceiling_pct\": %.2f, \"reproduced\": %zu, "
                 "\"reproduced_pct_of_ceiling\": %.2f, \"output_triangles\": %zu, \"extra\": %zu, \"hausdorff_pct_diag\": %.4f, ",
-                in.size(), in_dt, 100.0 * in_dt / in.size(), reproduced, 100.0 * reproduced / std::max<std::size_t>(in_dt, 1),
+                in.size(), in_dt, pct(in_dt, in.size()), reproduced, pct(reproduced, in_dt),
                 out.size(), extra, 100.0 * h / diag);
     topo_json("input_topology", topology(in_tris));
     std::printf(", ");
@@ -327,12 +243,12 @@ int main(int argc, char** argv) {
     for (const auto& f : surface) in_bv.insert(f.begin(), f.end());
     std::size_t missing_bv = 0;
     for (auto v : in_bv) missing_bv += !out_bv.count(v);
-    Distance to_in(gp, surface), to_out(gp, out_bd);
+    SurfaceDistance to_in(gp, surface), to_out(gp, out_bd);
     const double h = std::max(one_sided(gp, out_bd, to_in), one_sided(gp, surface, to_out));
     std::printf("\"input_tets\": %zu, \"in_delaunay\": %zu, \"ceiling_pct\": %.2f, \"reproduced\": %zu, "
                 "\"reproduced_pct_of_ceiling\": %.2f, \"output_tets\": %zu, \"extra\": %zu, \"volume_ratio\": %.5f, "
                 "\"boundary_vertices\": %zu, \"boundary_vertices_missing\": %zu, \"boundary_hausdorff_pct_diag\": %.4f, ",
-                in.size(), in_dt, 100.0 * in_dt / in.size(), reproduced, 100.0 * reproduced / std::max<std::size_t>(in_dt, 1),
+                in.size(), in_dt, pct(in_dt, in.size()), reproduced, pct(reproduced, in_dt),
                 out.size(), extra, volume(outv) / volume(in_tets), in_bv.size(), missing_bv, 100.0 * h / diag);
     topo_json("input_boundary_topology", topology(surface));
     std::printf(", ");

@@ -139,8 +139,12 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     std::vector<std::uint8_t> truth;
     if (!grid.surface.empty()) truth = truth_labels(out.points, dt, gp, grid.surface, grid.surface);
     TuningReport tr;
-    const auto border = rep.kind == Kind::surface ? grid.border : std::vector<std::uint32_t>{};
-    const ReconParams params = tune(out.points, dt, rep.kind, truth, border, options.fidelity, &tr);
+    TuneInput ti;
+    ti.truth = std::move(truth);
+    if (rep.kind == Kind::surface) ti.border = grid.border;
+    ti.surface_points = &gp;
+    ti.surface = &grid.surface;
+    const ReconParams params = tune(out.points, dt, rep.kind, ti, options.fidelity, &tr);
     const std::size_t side_start = w.size();
     w.chunk(kRecon, write_recon(params));
     level.side_bytes = w.size() - side_start;

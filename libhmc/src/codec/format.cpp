@@ -170,6 +170,7 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   // Border vertices are only meaningful for surfaces; the list is empty otherwise.
   write_index_list(w, p.border);
   write_index_list(w, p.toggles);
+  write_index_list(w, p.drops);
   return std::move(w.data());
 }
 
@@ -201,6 +202,7 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
   }
   p.border = read_index_list(r, points, "border");
   p.toggles = read_index_list(r, std::uint64_t{0xffffffffu}, "toggle");
+  p.drops = read_index_list(r, std::uint64_t{0xffffffffu}, "dropped face");
   if (!r.at_end()) fail(Status::bad_layer, "RCON: " + std::to_string(r.remaining()) + " unexpected byte(s) at the end");
   return p;
 }

@@ -200,9 +200,8 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   return inside;
 }
 
-Reconstruction extract(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
-                       const std::vector<std::uint8_t>& inside, const std::vector<std::uint32_t>& border) {
-  (void)points;
+Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vector<std::uint8_t>& inside,
+                       const ReconParams& p) {
   Reconstruction r;
   r.inside = inside;
   const std::size_t nt = dt.tets.size();
@@ -212,7 +211,12 @@ Reconstruction extract(const std::vector<GridPoint>& points, const Tetrahedraliz
     return r;
   }
   if (kind != Kind::surface) return r;
+  const auto& border = p.border;
   auto on_border = [&](std::uint32_t v) { return std::binary_search(border.begin(), border.end(), v); };
+  auto is_dropped = [&](std::size_t t, int k) {
+    return !p.drops.empty() &&
+           std::binary_search(p.drops.begin(), p.drops.end(), static_cast<std::uint32_t>(4 * t + static_cast<std::size_t>(k)));
+  };
   for (std::size_t t = 0; t < nt; ++t) {
     if (!inside[t]) continue;
     for (int k = 0; k < 4; ++k) {
@@ -220,6 +224,7 @@ Reconstruction extract(const std::vector<GridPoint>& points, const Tetrahedraliz
       if (u != kNoTet && inside[u]) continue;
       Triangle f = face_of(dt, t, k);
       if (!border.empty() && on_border(f[0]) && on_border(f[1]) && on_border(f[2])) continue;
+      if (is_dropped(t, k)) continue;
       // Rotate so the smallest index comes first (orientation kept).
       while (f[0] > f[1] || f[0] > f[2]) f = {f[1], f[2], f[0]};
       r.triangles.push_back(f);
@@ -238,7 +243,9 @@ Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedr
     if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
     inside[t] ^= 1;
   }
-  return extract(points, dt, kind, inside, p.border);
+  if (!p.drops.empty() && p.drops.back() / 4 >= inside.size())
+    fail(Status::bad_layer, "RCON: dropped face " + std::to_string(p.drops.back()) + " does not exist");
+  return extract(dt, kind, inside, p);
 }
 
 }  // namespace hmc::detail

@@ -31,6 +31,9 @@ struct ReconParams {
   std::vector<std::uint32_t> border;
   /// Tetrahedra whose label is inverted after the rule (sorted, distinct).
   std::vector<std::uint32_t> toggles;
+  /// Surface faces left out of the output, as 4·tetrahedron + local face
+  /// (sorted, distinct): faces across the holes of an open surface.
+  std::vector<std::uint32_t> drops;
 };
 
 struct Reconstruction {
@@ -48,9 +51,10 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p);
 
-/// Surface or volume from final labels (toggles applied by the caller).
-Reconstruction extract(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
-                       const std::vector<std::uint8_t>& inside, const std::vector<std::uint32_t>& border);
+/// Surface or volume from final labels (toggles applied by the caller);
+/// of `p` only the border and drop lists are used.
+Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vector<std::uint8_t>& inside,
+                       const ReconParams& p);
 
 /// The whole normative rule.
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,

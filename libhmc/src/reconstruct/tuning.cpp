@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "entropy/huffman.hpp"
+#include "reconstruct/distance.hpp"
 #include "reconstruct/winding.hpp"
 
 namespace hmc::detail {
@@ -107,6 +108,44 @@ std::vector<std::uint8_t> interface_defects(const Tetrahedralization& dt, const 
   return bad;
 }
 
+// Faces of the reconstructed surface (after toggles and the border rule)
+// that stray from the input surface: caps across the holes of an open input.
+std::vector<std::uint32_t> hole_faces(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                      const ReconParams& p, const std::vector<Vec3>& surface_points,
+                                      const std::vector<Triangle>& surface) {
+  auto labels = rule_labels(points, dt, local_scale(points, dt, p.scale_rank), p);
+  for (auto t : p.toggles) labels[t] ^= 1;
+  const SurfaceDistance to_input(surface_points, surface);
+  const double tolerance = 1e-3 * bbox_diagonal(points);
+  auto on_border = [&](std::uint32_t v) { return std::binary_search(p.border.begin(), p.border.end(), v); };
+  std::vector<std::uint32_t> drops;
+  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+    if (!labels[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && labels[u]) continue;
+      Vec3 v[3];
+      for (int i = 0; i < 3; ++i) {
+        const auto& g = points[dt.tets[t][kFaceVertices[k][i]]];
+        v[i] = {double(g[0]), double(g[1]), double(g[2])};
+      }
+      if (on_border(dt.tets[t][kFaceVertices[k][0]]) && on_border(dt.tets[t][kFaceVertices[k][1]]) &&
+          on_border(dt.tets[t][kFaceVertices[k][2]]))
+        continue;  // the border rule removes it already
+      const Vec3 probes[4] = {{(v[0][0] + v[1][0] + v[2][0]) / 3, (v[0][1] + v[1][1] + v[2][1]) / 3, (v[0][2] + v[1][2] + v[2][2]) / 3},
+                              {(v[0][0] + v[1][0]) / 2, (v[0][1] + v[1][1]) / 2, (v[0][2] + v[1][2]) / 2},
+                              {(v[1][0] + v[2][0]) / 2, (v[1][1] + v[2][1]) / 2, (v[1][2] + v[2][2]) / 2},
+                              {(v[0][0] + v[2][0]) / 2, (v[0][1] + v[2][1]) / 2, (v[0][2] + v[2][2]) / 2}};
+      for (const auto& q : probes)
+        if (to_input(q) > tolerance) {
+          drops.push_back(static_cast<std::uint32_t>(4 * t + static_cast<std::size_t>(k)));
+          break;
+        }
+    }
+  }
+  return drops;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
@@ -161,9 +200,10 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   return label;
 }
 
-ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
-                 const std::vector<std::uint8_t>& truth, const std::vector<std::uint32_t>& border, Fidelity fidelity,
-                 TuningReport* report) {
+ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind, const TuneInput& in,
+                 Fidelity fidelity, TuningReport* report) {
+  const auto& truth = in.truth;
+  const auto& border = in.border;
   const std::size_t n = points.size(), nt = dt.tets.size();
   ReconParams best;
   best.border = border;
@@ -267,6 +307,8 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     for (std::size_t t = 0; t < nt; ++t)
       if (toggled[t]) best.toggles.push_back(static_cast<std::uint32_t>(t));
   }
+  if (kind == Kind::surface && !border.empty() && in.surface && in.surface_points)
+    best.drops = hole_faces(points, dt, best, *in.surface_points, *in.surface);
   if (report) {
     report->mismatches_before_toggles = best_mismatch;
     report->side_bits_estimate = best_bits;

@@ -36,13 +36,21 @@ struct TuningReport {
   std::uint64_t side_bits_estimate = 0;
 };
 
-/// Side information for `truth`: alpha classes, peeling, the border list,
-/// and toggles for the labels the rule still gets wrong: all of them
+/// What the encoder knows about the input, on the level's points.
+struct TuneInput {
+  std::vector<std::uint8_t> truth;     ///< truth_labels(); empty: input without connectivity
+  std::vector<std::uint32_t> border;   ///< border vertices of an open surface (sorted)
+  const std::vector<Vec3>* surface_points = nullptr;    ///< grid units
+  const std::vector<Triangle>* surface = nullptr;       ///< the input surface, for hole faces
+};
+
+/// Side information for `in.truth`: alpha classes, peeling, the border
+/// list, toggles for the labels the rule still gets wrong — all of them
 /// (Fidelity::exact), all but flat tetrahedra thinner than 0.1% of the
-/// bounding-box diagonal (Fidelity::shape), or none (Fidelity::rule).
-/// An empty `truth` (input without connectivity) gives default parameters.
-ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
-                 const std::vector<std::uint8_t>& truth, const std::vector<std::uint32_t>& border, Fidelity fidelity,
-                 TuningReport* report = nullptr);
+/// bounding-box diagonal (Fidelity::shape), or none (Fidelity::rule) — and,
+/// for open surfaces, the faces that stray more than 0.1% of the diagonal
+/// from the input (hole caps). Without truth: default parameters.
+ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind, const TuneInput& in,
+                 Fidelity fidelity, TuningReport* report = nullptr);
 
 }  // namespace hmc::detail
