@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 // delaunay_stats: the canonical Delaunay layer on real models.
 //
-//   delaunay_stats [--bits Q] [--no-check] [--orders] FILE...
+//   delaunay_stats [--bits Q] [--no-check] [--native] FILE...
 //
 // For each mesh file: quantize at q bits (default 12) as the encoder does,
 // then report the number of points and tetrahedra, how many tetrahedra
@@ -9,8 +9,8 @@
 // in-sphere test is exactly zero), the time of delaunay() (TetGen plus the
 // library's own certificate) per 100k points, the share of that spent
 // outside TetGen, and the independent checker's verdict (tests/support).
-// --orders also runs TetGen's three insertion orders and reports whether
-// their tetrahedra coincide (they must: the result is order-independent).
+// --native also times the native backend and reports whether its
+// tetrahedra coincide with TetGen's (they must: one rule, two codes).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -37,22 +37,22 @@ int main(int argc, char** argv) {
   using namespace hmc;
   using namespace hmc::detail;
   int bits = 12;
-  bool check = true, orders = false;
+  bool check = true, native = false;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--bits" && i + 1 < argc) bits = std::atoi(argv[++i]);
     else if (a == "--no-check") check = false;
-    else if (a == "--orders") orders = true;
+    else if (a == "--native") native = true;
     else files.push_back(a);
   }
   if (files.empty()) {
-    std::fprintf(stderr, "usage: delaunay_stats [--bits Q] [--no-check] [--orders] FILE...\n");
+    std::fprintf(stderr, "usage: delaunay_stats [--bits Q] [--no-check] [--native] FILE...\n");
     return 1;
   }
   std::printf("| model | q | points | tets | tie tets | tie faces | delaunay() s/100k pts | TetGen s/100k pts | "
-              "certificate share | checker |%s\n", orders ? " orders agree |" : "");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|%s\n", orders ? "---|" : "");
+              "certificate share | checker |%s\n", native ? " native s/100k pts | native = TetGen |" : "");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|%s\n", native ? "---|---|" : "");
   for (const auto& f : files) {
     auto mesh = io::read_mesh(f);
     if (!mesh) {
@@ -75,8 +75,8 @@ int main(int argc, char** argv) {
     // TetGen alone (first attempt), for the share of the certificate.
     std::vector<std::array<std::uint32_t, 4>> raw, raw_nb;
     t0 = std::chrono::steady_clock::now();
-    backend::tetrahedralize(pts, 0, raw, raw_nb);
-    const double t_tetgen = seconds_since(t0);
+    const bool tetgen_used = backend::tetgen(pts, raw, raw_nb);
+    const double t_tetgen = tetgen_used ? seconds_since(t0) : 0.0;
 
     // Tie-dependence with the library's (fast) predicates.
     std::vector<char> tie(dt.tets.size(), 0);
@@ -102,23 +102,28 @@ int main(int argc, char** argv) {
       if (rep.ok && rep.tie_tets != tie_tets) verdict = "ok (tie count differs!)";
     }
     std::string agree;
-    if (orders) {
-      agree = "yes";
-      for (int a = 1; a < 3; ++a) {
-        std::vector<std::array<std::uint32_t, 4>> other, other_nb;
-        backend::tetrahedralize(pts, a, other, other_nb);
-        for (auto& t : other) canonicalize_tet(pts, t);
-        std::sort(other.begin(), other.end());
-        if (other != dt.tets) agree = "NO (attempt " + std::to_string(a) + ")";
-      }
-      agree = " " + agree + " |";
+    if (native) {
+      std::vector<std::array<std::uint32_t, 4>> other, other_nb;
+      t0 = std::chrono::steady_clock::now();
+      backend::native(pts, other, other_nb);
+      const double t_native = seconds_since(t0);
+      for (auto& t : other) canonicalize_tet(pts, t);
+      std::sort(other.begin(), other.end());
+      char buf[64];
+      std::snprintf(buf, sizeof buf, " %.3f | %s |", t_native * 1e5 / static_cast<double>(pts.size()),
+                    other == dt.tets ? "yes" : "NO");
+      agree = buf;
     }
     const auto name = f.substr(f.find_last_of('/') + 1);
     const double per = 1e5 / static_cast<double>(pts.size());
-    std::printf("| %s | %d | %zu | %zu | %zu (%.2f%%) | %zu | %.3f | %.3f | %.0f%% | %s |%s\n", name.c_str(), bits,
+    char tg[64] = "not used (extent >= 2^16)", share[32] = "-";
+    if (tetgen_used) {
+      std::snprintf(tg, sizeof tg, "%.3f", t_tetgen * per);
+      std::snprintf(share, sizeof share, "%.0f%%", 100.0 * (t_total - t_tetgen) / t_total);
+    }
+    std::printf("| %s | %d | %zu | %zu | %zu (%.2f%%) | %zu | %.3f | %s | %s | %s |%s\n", name.c_str(), bits,
                 pts.size(), dt.tets.size(), tie_tets, 100.0 * static_cast<double>(tie_tets) / static_cast<double>(dt.tets.size()),
-                tie_faces, t_total * per, t_tetgen * per, 100.0 * (t_total - t_tetgen) / t_total, verdict.c_str(),
-                agree.c_str());
+                tie_faces, t_total * per, tg, share, verdict.c_str(), agree.c_str());
     std::fflush(stdout);
   }
   return 0;

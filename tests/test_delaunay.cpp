@@ -65,6 +65,14 @@ Tetrahedralization run(const std::vector<GridPoint>& p, bool plane_check = true)
   INFO("points: " << p.size() << ", tets: " << t.tets.size());
   CHECK_MESSAGE(rep.ok, rep.error);
   CHECK(certificate_error(p, t.tets).empty());
+  // The native backend agrees (delaunay() uses TetGen where it may).
+  if (!t.tets.empty()) {
+    std::vector<Tet> other, other_nb;
+    backend::native(p, other, other_nb);
+    for (auto& T : other) CHECK(canonicalize_tet(p, T));
+    std::sort(other.begin(), other.end());
+    CHECK(other == t.tets);
+  }
   // The neighbours are the face adjacency.
   REQUIRE(t.neighbors.size() == t.tets.size());
   for (std::size_t i = 0; i < t.tets.size(); ++i)
@@ -215,6 +223,11 @@ TEST_CASE("agrees with the brute-force definition on small degenerate sets") {
     const auto t = delaunay(p);
     INFO("trial " << trial << ", n = " << p.size());
     CHECK(t.tets == expected);
+    std::vector<Tet> nat, nat_nb;
+    backend::native(p, nat, nat_nb);
+    for (auto& T : nat) CHECK(canonicalize_tet(p, T));
+    std::sort(nat.begin(), nat.end());
+    CHECK(nat == expected);
     const auto rep = check::check_delaunay(p, t.tets);
     CHECK_MESSAGE(rep.ok, rep.error);
     tie_sets += rep.cospherical_faces > 0;
@@ -335,25 +348,51 @@ TEST_CASE("adjacency and hull faces") {
   }
 }
 
-TEST_CASE("TetGen's result does not depend on its insertion order") {
-  // Attempt 0 inserts in TetGen's default BRIO/Hilbert order, 1 in a plain
-  // random order, 2 in canonical order: the tie-breaking rule, not the
-  // history of insertions, decides the ties.
-  const std::vector<std::vector<GridPoint>> sets = {lattice(6, 5, 4), sphere_points(13), lattice(3, 3, 3, 699050, 1),
-                                                    quantize(samples::torus(40, 16), 9),
-                                                    quantize(samples::random_ball(2000, 8), 7)};
+TEST_CASE("TetGen and the native backend build the same tetrahedra") {
+  // Two independent constructions, one rule: TetGen's insertion order (BRIO
+  // with Hilbert curves, randomised) and the native one (BRIO with Morton
+  // curves, another seed) differ, the ties they meet differ, the result
+  // does not.
+  const std::vector<std::vector<GridPoint>> sets = {
+      lattice(6, 5, 4), lattice(8, 8, 8), sphere_points(13), sphere_points(25), lattice(3, 3, 3, 21845, 7),
+      quantize(samples::torus(40, 16), 9), quantize(samples::random_ball(2000, 8), 7),
+      quantize(samples::uv_sphere(20, 30), 12), quantize(samples::clustered(4, 100, 3), 10)};
   for (const auto& p : sets) {
-    const auto t = delaunay(p);
-    for (int attempt = 0; attempt < 3; ++attempt) {
-      std::vector<Tet> tets, nb;
-      REQUIRE(backend::tetrahedralize(p, attempt, tets, nb));
-      CHECK(nb.size() == tets.size());
-      CHECK(certificate_error(p, tets).empty());
-      for (auto& T : tets) CHECK(canonicalize_tet(p, T));
-      std::sort(tets.begin(), tets.end());
-      CHECK(tets == t.tets);
+    std::vector<Tet> a, an, b, bn;
+    REQUIRE(backend::tetgen(p, a, an));
+    backend::native(p, b, bn);
+    CHECK(certificate_error(p, a).empty());
+    CHECK(certificate_error(p, b).empty());
+    for (auto* v : {&a, &b}) {
+      for (auto& T : *v) CHECK(canonicalize_tet(p, T));
+      std::sort(v->begin(), v->end());
     }
-    std::vector<Tet> none, none_nb;
-    CHECK(!backend::tetrahedralize(p, 3, none, none_nb));
+    CHECK(a == b);
+    CHECK(a == delaunay(p).tets);
+  }
+}
+
+TEST_CASE("large coordinates: the native backend, and no TetGen hazards") {
+  // TetGen is not run when a coordinate extent reaches 2^16 (its first
+  // tetrahedron is chosen in floating point); delaunay() still answers.
+  std::vector<Tet> t, n;
+  CHECK(!backend::tetgen(lattice(3, 3, 3, 1u << 15), t, n));
+  CHECK(backend::tetgen(lattice(3, 3, 3, (1u << 15) - 1), t, n));
+  run(lattice(5, 4, 3, 400000, 3));
+  run(quantize(samples::random_ball(3000, 21), 21));
+  run(quantize(samples::torus(60, 24), 19));
+  // Nearly flat sets spanning the whole range: a tilted plane x + y + z = C
+  // and one point off it by one unit. (These made TetGen abort.)
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<GridPoint> p;
+    const std::uint32_t C = 3u << 20;
+    while (p.size() < 600) {
+      const auto a = static_cast<std::uint32_t>(rng() % (1u << 21)), b = static_cast<std::uint32_t>(rng() % (1u << 21));
+      if (a + b > C || C - a - b >= (1u << 21)) continue;
+      p.push_back({a, b, C - a - b});
+    }
+    p.push_back({700000, 700000, C - 1400000 + 1});
+    run(canonical(p));
   }
 }

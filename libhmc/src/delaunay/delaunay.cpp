@@ -253,10 +253,9 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points) {
   Tetrahedralization out;
   if (!spans_3d(points)) return out;
 
-  std::string error = "no backend attempt";
-  for (int attempt = 0;; ++attempt) {
-    TetList tets, nb;
-    if (!backend::tetrahedralize(points, attempt, tets, nb)) break;
+  TetList tets, nb;
+  std::string error = "TetGen not applicable";
+  if (backend::tetgen(points, tets, nb)) {
     error = verify_backend_output(points, tets, nb);
     if (error.empty()) {
       out.tets = std::move(tets);
@@ -264,7 +263,16 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points) {
       return out;
     }
   }
-  fail(Status::internal_error, "delaunay: the backend's output failed verification (" + error + ")");
+  tets.clear();
+  nb.clear();
+  backend::native(points, tets, nb);
+  const std::string native_error = verify_backend_output(points, tets, nb);
+  if (!native_error.empty())
+    fail(Status::internal_error, "delaunay: no backend produced a verified tetrahedralization (TetGen: " + error +
+                                     "; native: " + native_error + ")");
+  out.tets = std::move(tets);
+  out.neighbors = std::move(nb);
+  return out;
 }
 
 }  // namespace hmc::detail

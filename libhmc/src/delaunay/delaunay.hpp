@@ -12,16 +12,22 @@
 // (a convex polytope inscribed in an empty sphere) triangulated by pulling
 // its vertices in canonical order.
 //
-// Backend. The tetrahedra are computed by TetGen 1.5 (tetgen_backend.cpp,
+// Backends. The tetrahedra are computed by TetGen 1.5 (tetgen_backend.cpp,
 // the only file that includes tetgen.h), which implements exactly this
-// perturbation. Whatever the backend, delaunay() verifies its output with
-// the exact predicates of predicates.hpp before returning it (see
-// certificate_error()), so a backend defect can never leak into decoded
-// output: it surfaces as Status::internal_error instead.
+// perturbation, when its one floating-point step is provably exact (points
+// spanning less than 2^16 grid units on every axis, e.g. every q <= 16);
+// otherwise, or should TetGen's output ever fail verification, by the
+// built-in exact incremental construction (native_backend.cpp). Whatever
+// the backend, delaunay() verifies its output with the exact predicates of
+// predicates.hpp before returning it (see certificate_error()), so a backend
+// defect can never leak into decoded output: it surfaces as
+// Status::internal_error instead.
 //
-// Cost (informative, one core of the reference machine): about 1.2 s per
-// million points in total, of which the verification and adjacency take
-// roughly a tenth. Calls are serialized (TetGen keeps global state).
+// Cost (informative; one core of the shared 2-core reference machine, 12-bit
+// models): TetGen about 0.5-0.7 s per 100k points; the canonical sort,
+// adjacency and certificate add 10-30 %; the native backend runs at about
+// TetGen's speed. TetGen calls are serialized (it keeps global state); the
+// native backend is reentrant.
 #pragma once
 
 #include <array>
@@ -80,17 +86,20 @@ std::string certificate_error(const std::vector<GridPoint>& points,
 bool canonicalize_tet(const std::vector<GridPoint>& points, std::array<std::uint32_t, 4>& tet);
 
 namespace backend {
-/// Implemented by exactly one backend (tetgen_backend.cpp). Fills `tets`
-/// in any order and any vertex order, and optionally `neighbors` (same
-/// order; neighbors[t][k] across the face opposite tets[t][k], kNoTet on the
-/// hull; left empty if the backend has no adjacency to offer: it is then
-/// built here). Both are verified before use. `attempt` (0, 1, 2, ...)
-/// selects a different point-insertion order on retries; returns false when
-/// there is no further attempt to offer. Only called with at least 4 points
-/// not all coplanar. An empty `tets` means the attempt failed.
-bool tetrahedralize(const std::vector<GridPoint>& points, int attempt,
-                    std::vector<std::array<std::uint32_t, 4>>& tets,
-                    std::vector<std::array<std::uint32_t, 4>>& neighbors);
+// Backends fill `tets` (any order, any vertex order) and `neighbors` (same
+// order; neighbors[t][k] across the face opposite tets[t][k], kNoTet on the
+// hull). delaunay() verifies both before use. Only called with at least 4
+// points not all coplanar.
+
+/// TetGen 1.5 (tetgen_backend.cpp). Returns false, without running TetGen,
+/// when TetGen cannot be run safely on these points (coordinate extent of
+/// 2^16 or more; see there).
+bool tetgen(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
+            std::vector<std::array<std::uint32_t, 4>>& neighbors);
+
+/// The built-in exact incremental construction (native_backend.cpp).
+void native(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
+            std::vector<std::array<std::uint32_t, 4>>& neighbors);
 }  // namespace backend
 
 }  // namespace hmc::detail

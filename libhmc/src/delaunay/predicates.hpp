@@ -16,9 +16,8 @@
 //             each 3x3 minor < 2^66 as above; each term lift * minor
 //             < 2^44 * 2^66 = 2^110; four terms: |det| < 2^112 (int128,
 //             whose range is 2^127).
-// All differences are taken relative to the first argument, which is what
-// keeps the entries at 22 bits; raw coordinates would need 2 more bits per
-// factor and still fit, but the relative form is the one the spec writes.
+// All differences are taken relative to the first argument, as in the
+// formulas of spec/delaunay.md §2.
 #pragma once
 
 #include <array>

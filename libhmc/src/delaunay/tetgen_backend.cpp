@@ -15,15 +15,30 @@
 //
 // Switches: z (indices from 0), Q (quiet), N and F (no node, face or edge
 // output), n (neighbours: neighborlist[4t + k] is the tetrahedron across the
-// face opposite corner k, -1 on the hull; cheaper than rebuilding it), J (never renumber points; ours are
-// distinct, so nothing would be jettisoned anyway). No -p/-q/-a/-Y: no
-// Steiner points, no refinement. Never -X: exact arithmetic stays on.
-// Retries (attempt 1, 2) change only the insertion order: b0 is a plain
-// random order, b/1 the input order. They exist because TetGen picks its
-// first tetrahedron with a floating-point orient3d and a tolerance, which
-// could in principle pick a flat one for coordinates near 2^21.
+// face opposite corner k, -1 on the hull), J (never renumber points; ours
+// are distinct, so nothing would be jettisoned anyway). Default insertion
+// order (BRIO with Hilbert curves). No -p/-q/-a/-Y: no Steiner points, no
+// refinement. Never -X: exact arithmetic stays on.
+//
+// The one floating-point hazard. TetGen picks its first tetrahedron with a
+// floating-point orient3d (orient3dfast) and a tolerance. With integer
+// coordinates whose extent E (largest max - min over the axes) is below
+// 2^16, every product in it is below 2^49 and every sum below 2^51, so it is
+// exact, and with the default tolerance (-T 1e-8) TetGen accepts exactly the
+// truly non-coplanar candidates (|orient| >= 1 > 1e-24 * diagonal^3): its
+// first tetrahedron is valid and correctly oriented, and its collinearity
+// and coincidence tests (exact cross products, distances >= 1) cannot fail
+// on a set that spans 3D. For larger extents the rounding error (up to about
+// 2e-15 E^3) could make it accept a coplanar fourth point or the wrong
+// orientation; TetGen then fails an assert() and aborts the process.
+// Raising the tolerance does not help: TetGen then gives up on thin sets by
+// throwing, and TetGen 1.5.0 frees its memory twice when it throws from
+// tetrahedralize() in a library build (terminatetetgen() frees, then the
+// tetgenmesh destructor frees again), which crashes as well. So TetGen only
+// runs when E < 2^16; larger inputs go to the native backend.
 #include <tetgen.h>
 
+#include <algorithm>
 #include <mutex>
 
 #include "delaunay/delaunay.hpp"
@@ -38,14 +53,15 @@ namespace {
 std::mutex tetgen_mutex;
 }  // namespace
 
-bool tetrahedralize(const std::vector<GridPoint>& points, int attempt,
-                    std::vector<std::array<std::uint32_t, 4>>& tets,
-                    std::vector<std::array<std::uint32_t, 4>>& neighbors) {
-  static const char* const kSwitches[] = {"zQNFJn", "zQNFJnb0", "zQNFJnb/1"};
-  if (attempt < 0 || attempt >= 3) return false;
-  char switches[16] = {};
-  for (int i = 0; kSwitches[attempt][i] != '\0'; ++i) switches[i] = kSwitches[attempt][i];
+bool tetgen(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
+            std::vector<std::array<std::uint32_t, 4>>& neighbors) {
+  std::uint32_t lo[3] = {~0u, ~0u, ~0u}, hi[3] = {0, 0, 0};
+  for (const auto& p : points)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  if (std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) >= (1u << 16)) return false;
+  if (points.size() > 0x7FFFFFFFu / 4) return false;
 
+  char switches[] = "zQNFJn";
   std::lock_guard<std::mutex> lock(tetgen_mutex);
   tetgenio in, out;
   in.firstnumber = 0;
@@ -56,23 +72,19 @@ bool tetrahedralize(const std::vector<GridPoint>& points, int attempt,
     for (int a = 0; a < 3; ++a) in.pointlist[3 * i + a] = static_cast<REAL>(points[i][a]);
   try {
     tetrahedralize(switches, &in, &out);
-  } catch (int code) {
-    // terminatetetgen() throws its exit code in library builds:
-    // 1 out of memory, 2 internal error, 10 input error (e.g. its tolerance
-    // judged the points coplanar).
-    if (code == 1) fail(Status::out_of_memory, "TetGen: out of memory");
-    tets.clear();
-    neighbors.clear();
-    return true;  // an empty result fails verification: try the next order
+  } catch (int) {
+    // terminatetetgen() throws its exit code in library builds. Unreachable
+    // for the inputs admitted above (and see the note on double frees).
+    return false;
   }
-  if (out.numberofcorners != 4 || out.numberoftetrahedra < 0) fail(Status::internal_error, "TetGen: bad output");
+  if (out.numberofcorners != 4 || out.numberoftetrahedra < 0 || out.neighborlist == nullptr) return false;
   const auto nt = static_cast<std::size_t>(out.numberoftetrahedra);
   tets.resize(nt);
-  neighbors.resize(out.neighborlist != nullptr ? nt : 0);
+  neighbors.resize(nt);
   auto index = [](int v) { return v < 0 ? kNoTet : static_cast<std::uint32_t>(v); };
   for (std::size_t i = 0; i < 4 * nt; ++i) {
     tets[i / 4][i % 4] = index(out.tetrahedronlist[i]);
-    if (!neighbors.empty()) neighbors[i / 4][i % 4] = index(out.neighborlist[i]);
+    neighbors[i / 4][i % 4] = index(out.neighborlist[i]);
   }
   return true;
 }
