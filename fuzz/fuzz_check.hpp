@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <type_traits>
+#include <utility>
 
 #include "hmc/status.hpp"
 
@@ -56,6 +58,68 @@ inline bool is_stream_error(hmc::Status s) {
     case hmc::Status::bad_layer:
     case hmc::Status::limit_exceeded: return true;
     default: return false;
+  }
+}
+
+// The codec's reconstruction (DecodeOptions::reconstruct, triangles and
+// tetrahedra in DecodedLevel and Encoded) is used when the library has it;
+// these let the targets compile against the library with or without it.
+template <class T, class = void>
+struct has_reconstruct_option : std::false_type {};
+template <class T>
+struct has_reconstruct_option<T, std::void_t<decltype(std::declval<T&>().reconstruct)>> : std::true_type {};
+
+template <class T, class = void>
+struct has_connectivity : std::false_type {};
+template <class T>
+struct has_connectivity<T, std::void_t<decltype(std::declval<T&>().triangles.size()),
+                                       decltype(std::declval<T&>().tetrahedra.size())>> : std::true_type {};
+
+/// Turns reconstruction on or off; false if the library cannot reconstruct.
+template <class Options>
+bool set_reconstruct(Options& o, bool on) {
+  if constexpr (has_reconstruct_option<Options>::value) {
+    o.reconstruct = on;
+    return true;
+  } else {
+    (void)o;
+    (void)on;
+    return false;
+  }
+}
+
+/// Number of triangles plus tetrahedra of a decoded level or an encoding,
+/// after checking that every index is below `points` and that no element
+/// repeats a vertex. Zero when the library has no connectivity.
+template <class T>
+std::size_t check_connectivity(const T& x, std::size_t points) {
+  if constexpr (has_connectivity<T>::value) {
+    for (const auto& t : x.triangles) {
+      for (auto v : t) FUZZ_CHECK(v < points, "triangle vertex %u of %zu points", unsigned(v), points);
+      FUZZ_CHECK(t[0] != t[1] && t[1] != t[2] && t[0] != t[2], "degenerate triangle");
+    }
+    for (const auto& t : x.tetrahedra) {
+      for (auto v : t) FUZZ_CHECK(v < points, "tetrahedron vertex %u of %zu points", unsigned(v), points);
+      FUZZ_CHECK(t[0] != t[1] && t[0] != t[2] && t[0] != t[3] && t[1] != t[2] && t[1] != t[3] && t[2] != t[3],
+                 "degenerate tetrahedron");
+    }
+    return x.triangles.size() + x.tetrahedra.size();
+  } else {
+    (void)x;
+    (void)points;
+    return 0;
+  }
+}
+
+/// True when both have the same connectivity (or the library has none).
+template <class A, class B>
+bool same_connectivity(const A& a, const B& b) {
+  if constexpr (has_connectivity<A>::value && has_connectivity<B>::value)
+    return a.triangles == b.triangles && a.tetrahedra == b.tetrahedra;
+  else {
+    (void)a;
+    (void)b;
+    return true;
   }
 }
 

@@ -6,6 +6,11 @@
 // chunk recomputed, so that mutated payloads get past the CRC check and
 // reach the header, table and layer parsers.
 //
+// Decoding skips the reconstruction of triangles or tetrahedra (where the
+// library has it) except for sets of at most kMaxReconstruct points, which
+// are decoded again with it: the Delaunay step costs far more per point
+// than the point decoding fuzzed here.
+//
 // Checks: every failure is one of the spec's stream error classes; a
 // decoded stream has its declared number of distinct grid points in
 // canonical order; inspect agrees with decode (it succeeds whenever decode
@@ -26,6 +31,8 @@ using hmc::Status;
 bool less(const GridPoint& a, const GridPoint& b) {
   return a[0] != b[0] ? a[0] < b[0] : a[1] != b[1] ? a[1] < b[1] : a[2] < b[2];
 }
+
+constexpr std::size_t kMaxReconstruct = 2048;
 
 bool same_quantizer(const hmc::ScalarQuantizer& a, const hmc::ScalarQuantizer& b) {
   return a.bits == b.bits && std::memcmp(a.origin.data(), b.origin.data(), sizeof a.origin) == 0 &&
@@ -61,6 +68,7 @@ void check_stream(const std::uint8_t* data, std::size_t size) {
   options.limits.max_points = std::uint64_t{1} << 18;
   options.limits.max_levels = 64;
   options.limits.max_bytes = std::uint64_t{1} << 24;
+  const bool can_reconstruct = hmc_fuzz::set_reconstruct(options, false);
 
   const auto dec = hmc::decode(data, size, options);
   const auto info = hmc::inspect(data, size, options.limits);
@@ -102,6 +110,8 @@ void check_stream(const std::uint8_t* data, std::size_t size) {
                  d.quantizer.bits);
       FUZZ_CHECK(i == 0 || less(level.points[i - 1], p), "points %zu, %zu not in strict canonical order", i - 1, i);
     }
+    FUZZ_CHECK(hmc_fuzz::check_connectivity(level, level.points.size()) == 0,
+               "connectivity rebuilt though reconstruction is off");
   }
   if (d.vector_quantizer) {
     const auto& cb = d.vector_quantizer->codebook;
@@ -127,6 +137,28 @@ void check_stream(const std::uint8_t* data, std::size_t size) {
   FUZZ_CHECK(s.truncated == !d.warning.empty(), "inspect truncated %d, decode warning '%s'", int(s.truncated),
              d.warning.c_str());
   FUZZ_CHECK(!s.chunks.empty() && s.chunks.front().type == "HEAD", "inspect's first chunk is not HEAD");
+
+  // Small sets again, with reconstruction: the same points, and elements
+  // that index them.
+  if (can_reconstruct && d.finest().points.size() <= kMaxReconstruct) {
+    hmc_fuzz::set_reconstruct(options, true);
+    const auto full = hmc::decode(data, size, options);
+    // Only a reconstructing decoder checks some side information (toggle
+    // indices against the tetrahedra, spec "RCON"): a stream error may
+    // appear here, nothing else.
+    if (!full.ok()) {
+      FUZZ_CHECK(full.status() == Status::bad_layer, "decoding with reconstruction: %s",
+                 full.error().to_string().c_str());
+      return;
+    }
+    const hmc::Decoded& f = full.value();
+    FUZZ_CHECK(f.levels.size() == d.levels.size(), "reconstruction changes the levels decoded");
+    for (std::size_t k = 0; k < f.levels.size(); ++k) {
+      FUZZ_CHECK(f.levels[k].points == d.levels[k].points, "reconstruction changes the points of level %zu", k);
+      const std::size_t elements = hmc_fuzz::check_connectivity(f.levels[k], f.levels[k].points.size());
+      if (f.kind == hmc::Kind::points) FUZZ_CHECK(elements == 0, "elements rebuilt for kind points");
+    }
+  }
 }
 
 }  // namespace

@@ -10,7 +10,7 @@ OUT="$HMC_BUILD/demo"
 mkdir -p "$OUT"
 "$HMC" gen torus --vertices 36450 -o "$OUT/torus.ply"
 echo
-"$HMC" enc "$OUT/torus.ply" -o "$OUT/torus.hmc" --bits 12
+"$HMC" enc "$OUT/torus.ply" -o "$OUT/torus.hmc" --bits 12 --levels 4
 echo
 "$HMC" dec "$OUT/torus.hmc" -o "$OUT/torus-decoded.ply"
 echo

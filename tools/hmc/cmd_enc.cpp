@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 #include <string>
 
@@ -26,7 +27,8 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info"},
-         {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity"});
+         {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio",
+          "--boundary", "--optimizer"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
   bool kind_ok = true;
@@ -36,6 +38,33 @@ int cmd_enc(int argc, char** argv) {
     return kUsage;
   }
   opt.write_info = !a.flag("--no-info");
+  opt.levels = static_cast<int>(a.get_int("--levels", 1, 1, 64));
+  if (a.has("--ratio")) {
+    char* end = nullptr;
+    const std::string r = a.get("--ratio");
+    opt.removal_ratio = std::strtod(r.c_str(), &end);
+    if (end == r.c_str() || *end || !(opt.removal_ratio > 0 && opt.removal_ratio <= 1)) {
+      std::fprintf(stderr, "hmc enc: --ratio must be a number in (0, 1], got '%s'\n", r.c_str());
+      return kUsage;
+    }
+  }
+  const std::string bm = a.get("--boundary", "constant");
+  if (bm == "constant") opt.boundary_mode = BoundaryMode::constant;
+  else if (bm == "linear") opt.boundary_mode = BoundaryMode::linear;
+  else if (bm == "adaptive") opt.boundary_mode = BoundaryMode::adaptive;
+  else {
+    std::fprintf(stderr, "hmc enc: --boundary must be constant, linear or adaptive\n");
+    return kUsage;
+  }
+  const std::string om = a.get("--optimizer", "best");
+  if (om == "forward") opt.optimizer = Optimizer::forward;
+  else if (om == "backward") opt.optimizer = Optimizer::backward;
+  else if (om == "greedy") opt.optimizer = Optimizer::greedy;
+  else if (om == "best") opt.optimizer = Optimizer::best;
+  else {
+    std::fprintf(stderr, "hmc enc: --optimizer must be forward, backward, greedy or best\n");
+    return kUsage;
+  }
   const std::string fid = a.get("--fidelity", "shape");
   if (fid == "rule") opt.fidelity = Fidelity::rule;
   else if (fid == "shape") opt.fidelity = Fidelity::shape;
@@ -78,9 +107,10 @@ int cmd_enc(int argc, char** argv) {
     const std::string dir = a.get("--canonical");
     const bool existed = exists(dir);
     std::vector<std::uint64_t> declared;
+    std::vector<DumpLevel> levels;
     for (const auto& l : e.report.levels) declared.push_back(l.points);
-    auto w = write_canonical_dump(dir, e.report.kind, e.report.quantizer, declared,
-                                  {DumpLevel{0, &e.points, &e.triangles, &e.tetrahedra}});
+    for (const auto& l : e.levels) levels.push_back({l.lod, &l.points, &l.triangles, &l.tetrahedra});
+    auto w = write_canonical_dump(dir, e.report.kind, e.report.quantizer, declared, levels);
     if (!w) return report("cannot write the canonical dump", w.error(), Stage::output);
     if (!existed) written.add(dir);
   }
@@ -105,6 +135,14 @@ int cmd_enc(int argc, char** argv) {
       j.key("layer_bytes").value(l.layer_bytes).key("side_bytes").value(l.side_bytes);
       j.key("stream_bytes").value(l.stream_bytes);
       j.key("label_corrections").value(l.label_corrections).key("rule_mismatches").value(l.rule_mismatches);
+      j.key("simplices").value(l.simplices);
+      j.key("boundary_removed").value(l.boundary_removed).key("inner_removed").value(l.inner_removed);
+      j.key("classification_disagreements").value(l.classification_disagreements);
+      j.key("dmax").value(l.dmax).key("optimizer").value(optimizer_name(l.optimizer));
+      j.key("mean_importance_retained").value(l.mean_importance_retained);
+      j.key("layers").begin_array();
+      for (auto n : l.layer_sizes) j.value(n);
+      j.end_array();
       j.end_object();
     }
     j.end_array();

@@ -16,6 +16,7 @@ int cmd_dec(int argc, char** argv);
 int cmd_info(int argc, char** argv);
 int cmd_gen(int argc, char** argv);
 int cmd_quality(int argc, char** argv);
+int cmd_analyze(int argc, char** argv);
 }  // namespace hmc::cli
 
 namespace {
@@ -28,7 +29,12 @@ const char* kUsage =
     "                      MEDIT .mesh, Gmsh .msh, VTK) into an HMC stream\n"
     "      --bits Q            quantization bits per axis, 1..21 (default 12)\n"
     "      --kind K            points | surface | volume (default: detected from the input)\n"
-    "      --canonical DIR     also write the canonical dump of the quantized input\n"
+    "      --levels N          levels of detail, 1..64 (default 1)\n"
+    "      --ratio R           share of a level's vertices removed per level, (0,1] (default 0.3)\n"
+    "      --boundary M        constant | linear | adaptive Dmax (default constant)\n"
+    "      --optimizer O       forward | backward | greedy | best, for volume interiors (default best)\n"
+    "      --fidelity F        rule | shape | exact reconstruction side information (default shape)\n"
+    "      --canonical DIR     also write the canonical dump of every level\n"
     "      --no-info           omit the ancillary info chunk\n"
     "      --json              print the report as JSON\n"
     "  dec IN.hmc -o OUT   decode the finest level (or --level K) to PLY, OBJ, XYZ, VTK, VTU, ...\n"
@@ -39,6 +45,7 @@ const char* kUsage =
     "      --json              print a summary as JSON\n"
     "  info IN.hmc         list chunks and levels [--json]\n"
     "  quality MESH        element quality (thesis 3.5): triangle angle and edge ratio, QT1-QT4 [--json]\n"
+    "  analyze IN          the thesis' per-level tables (4.1-4.12) for a mesh or a stream [--levels N] [--json]\n"
     "  gen SAMPLE -o OUT   write a generated sample: torus, sphere (surfaces), ball, lattice (points)\n"
     "      --vertices N        about N vertices (default 36450)    --seed S   random seed\n"
     "  version             print the library version\n"
@@ -59,6 +66,7 @@ int main(int argc, char** argv) {
   if (cmd == "info") return hmc::cli::cmd_info(argc, argv);
   if (cmd == "gen") return hmc::cli::cmd_gen(argc, argv);
   if (cmd == "quality") return hmc::cli::cmd_quality(argc, argv);
+  if (cmd == "analyze") return hmc::cli::cmd_analyze(argc, argv);
   if (cmd == "version" || cmd == "--version") {
     std::printf("hmc %s\n", hmc::version_string());
     return 0;

@@ -66,6 +66,23 @@ enum class Fidelity : std::uint8_t {
   exact = 2,  ///< also correct those: the decoded labels equal the input's exactly
 };
 
+/// How boundary (surface) vertices are chosen for removal (thesis §3.4.1):
+/// by their distance to the plane (or chord) of their neighbours, below a
+/// threshold Dmax that is constant over the levels, grows linearly with the
+/// level, or adapts to each region's local spacing and level.
+enum class BoundaryMode : std::uint8_t { constant = 0, linear = 1, adaptive = 2 };
+
+/// How interior vertices of a volume are chosen for removal (thesis
+/// §3.4.2): by importance, layer by layer from the boundary inward
+/// (forward), from the centre outward (backward), all layers at once
+/// (greedy), or whichever of those and of the central-layer variants keeps
+/// the most important vertices (best).
+enum class Optimizer : std::uint8_t { forward = 0, backward = 1, greedy = 2, best = 3 };
+
+/// Stable lower-case names: "constant", "forward", ...
+const char* boundary_mode_name(BoundaryMode m) noexcept;
+const char* optimizer_name(Optimizer o) noexcept;
+
 /// Encoder settings.
 struct EncodeOptions {
   /// q, bits per axis of the quantization grid, 1..21.
@@ -77,6 +94,15 @@ struct EncodeOptions {
   bool write_info = true;
   /// Reconstruction side information (surface and volume kinds).
   Fidelity fidelity = Fidelity::shape;
+  /// Levels of detail, 1..64. Level 0 is the input; each coarser level
+  /// removes an independent set of the finer level's vertices. Fewer levels
+  /// are written when a level has nothing left to remove.
+  int levels = 1;
+  /// Share of a level's vertices to remove to make the next coarser level
+  /// (0 < ratio <= 1; 1 removes as many as independence allows).
+  double removal_ratio = 0.3;
+  BoundaryMode boundary_mode = BoundaryMode::constant;
+  Optimizer optimizer = Optimizer::best;
 };
 
 /// Per-level figures of an encoded or decoded stream.
@@ -89,6 +115,16 @@ struct LevelReport {
   std::uint64_t stream_bytes = 0; ///< prefix of the stream that decodes this level
   std::uint64_t label_corrections = 0;  ///< tetrahedron labels the side information corrects
   std::uint64_t rule_mismatches = 0;    ///< labels the rule alone gets wrong (encoder only)
+
+  // Encoder only: how this level was decimated into the next coarser one.
+  std::uint64_t simplices = 0;                 ///< triangles or tetrahedra of this level
+  std::vector<std::uint64_t> layer_sizes;      ///< vertices per layer L0 (boundary), L1, ... of its mesh
+  std::uint64_t boundary_removed = 0;          ///< boundary vertices removed from this level
+  std::uint64_t inner_removed = 0;             ///< interior vertices removed from this level
+  std::uint64_t classification_disagreements = 0;  ///< vertices the face and solid-angle tests classify differently
+  double dmax = 0;                             ///< Dmax used (grid units)
+  Optimizer optimizer = Optimizer::best;       ///< the inner optimiser that was used (what `best` chose)
+  double mean_importance_retained = 0;         ///< mean IP (eq. 3.1) of the interior vertices kept
 };
 
 /// What the encoder did.
@@ -102,6 +138,18 @@ struct EncodeReport {
   std::vector<LevelReport> levels;      ///< coarsest first
 };
 
+/// One decoded level.
+struct DecodedLevel {
+  int lod = 0;                     ///< level index, 0 = finest
+  std::vector<GridPoint> points;   ///< canonical order: ascending (x, y, z)
+  std::uint64_t stream_bytes = 0;  ///< prefix length of the stream that decodes it
+  /// Rebuilt connectivity, indices into `points` (surface kind: triangles,
+  /// counter-clockwise seen from outside; volume kind: positively oriented
+  /// tetrahedra), in canonical order (spec "Reconstruction").
+  std::vector<Triangle> triangles;
+  std::vector<Tetrahedron> tetrahedra;
+};
+
 /// An encoded stream with its report.
 struct Encoded {
   std::vector<std::uint8_t> bytes;
@@ -113,6 +161,8 @@ struct Encoded {
   /// (indices into `points`): triangles for surfaces, tetrahedra for volumes.
   std::vector<Triangle> triangles;
   std::vector<Tetrahedron> tetrahedra;
+  /// Every level as the decoder will rebuild it, coarsest first.
+  std::vector<DecodedLevel> levels;
 };
 
 /// Quantize and encode `input`. Errors: invalid_argument (bits out of range,
@@ -137,17 +187,6 @@ struct DecodeOptions {
   bool reconstruct = true;
 };
 
-/// One decoded level.
-struct DecodedLevel {
-  int lod = 0;                     ///< level index, 0 = finest
-  std::vector<GridPoint> points;   ///< canonical order: ascending (x, y, z)
-  std::uint64_t stream_bytes = 0;  ///< prefix length of the stream that decodes it
-  /// Rebuilt connectivity, indices into `points` (surface kind: triangles,
-  /// counter-clockwise seen from outside; volume kind: positively oriented
-  /// tetrahedra), in canonical order (spec "Reconstruction").
-  std::vector<Triangle> triangles;
-  std::vector<Tetrahedron> tetrahedra;
-};
 
 /// A decoded stream.
 struct Decoded {

@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
+#include <algorithm>
+#include <optional>
 #include <string>
 
 #include "codec/format.hpp"
 #include "delaunay/delaunay.hpp"
 #include "reconstruct/reconstruct.hpp"
 #include "pointset/octree.hpp"
+#include "pointset/refine.hpp"
 #include "util/error.hpp"
 
 namespace hmc {
@@ -83,6 +86,13 @@ struct ChunkWalker {
       ++layers;
       return Action::layer;
     }
+    if (c.type == kRefinement) {
+      if (!layers) fail(Status::bad_chunk, name + ": REFN before BASE");
+      if (layers == header->points.size())
+        fail(Status::bad_chunk, name + ": more layers than the " + std::to_string(layers) + " declared levels");
+      ++layers;
+      return Action::layer;
+    }
     if (c.type == kRecon) {
       if (!needs_recon()) fail(Status::bad_chunk, name + ": RCON in a stream of kind points");
       if (recons == layers) fail(Status::bad_chunk, name + ": RCON must follow its level's layer chunk, once");
@@ -119,6 +129,7 @@ Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOpti
   out.version_minor = view.minor;
   ChunkWalker walk(options.limits);
   std::optional<DecodedLevel> pending;  // a level whose points are decoded, waiting for its RCON
+  std::vector<GridPoint> previous_points;  // the last decoded level's points
   for (const ChunkView& c : view.chunks) {
     switch (walk.classify(c)) {
       case ChunkWalker::Action::header:
@@ -131,16 +142,30 @@ Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOpti
       case ChunkWalker::Action::layer: {
         // Layers after the requested level are checked for order only.
         if (!out.levels.empty() && out.levels.back().lod <= options.finest_level) break;
-        if (c.length < 1) fail(Status::bad_layer, "BASE: empty payload");
-        if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
-          fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
-        pending = DecodedLevel{};
-        pending->lod = static_cast<int>(walk.header->points.size()) - 1;
-        pending->points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, walk.header->points.front());
-        pending->stream_bytes = c.offset + kChunkOverhead + c.length;
-        if (!walk.needs_recon()) {
-          out.levels.push_back(std::move(*pending));
-          pending.reset();
+        const std::size_t k = walk.layers - 1;  // position in stream order
+        const auto& counts = walk.header->points;
+        if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
+        DecodedLevel level;
+        level.lod = static_cast<int>(counts.size() - 1 - k);
+        if (k == 0) {
+          if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
+            fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
+          level.points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, counts.front());
+        } else {
+          if (c.payload[0] != static_cast<std::uint8_t>(RefineCoder::conditional_octree))
+            fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
+          const auto& coarse = previous_points;
+          const auto added =
+              decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, counts[k] - counts[k - 1]);
+          level.points.resize(coarse.size() + added.size());
+          std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), level.points.begin());
+        }
+        level.stream_bytes = c.offset + kChunkOverhead + c.length;
+        previous_points = level.points;
+        if (walk.needs_recon()) {
+          pending = std::move(level);
+        } else {
+          out.levels.push_back(std::move(level));
         }
         break;
       }
@@ -200,7 +225,7 @@ StreamInfo inspect_impl(const std::uint8_t* data, std::size_t size, const Decode
       info.levels.back().side_bytes = kChunkOverhead + c.length;
       info.levels.back().stream_bytes = c.offset + kChunkOverhead + c.length;
     } else if (action == ChunkWalker::Action::layer) {
-      LevelReport lr;
+      LevelReport lr;  // BASE or REFN
       const std::size_t k = walk.layers - 1;
       lr.lod = static_cast<int>(walk.header->points.size() - 1 - k);
       lr.points = walk.header->points[k];

@@ -3,6 +3,8 @@
 #include <string>
 
 #include "codec/format.hpp"
+#include "hierarchy/hierarchy.hpp"
+#include "pointset/refine.hpp"
 #include "delaunay/delaunay.hpp"
 #include "reconstruct/tuning.hpp"
 #include "reconstruct/winding.hpp"
@@ -96,70 +98,194 @@ std::vector<std::uint8_t> info_payload(const EncodeReport& r) {
   return {s.begin(), s.end()};
 }
 
+// One level as the encoder plans it.
+struct LevelPlan {
+  std::vector<GridPoint> points;   // canonical
+  std::vector<GridPoint> added;    // points this level adds to the next coarser one
+  ReconParams params;
+  Reconstruction rec;
+  LevelReport report;
+};
+
+detail::BoundaryMode to_detail(hmc::BoundaryMode m) {
+  return m == hmc::BoundaryMode::linear     ? detail::BoundaryMode::linear
+         : m == hmc::BoundaryMode::adaptive ? detail::BoundaryMode::adaptive
+                                            : detail::BoundaryMode::constant;
+}
+detail::InnerOptimizer to_detail(Optimizer o) {
+  switch (o) {
+    case Optimizer::forward: return detail::InnerOptimizer::forward;
+    case Optimizer::backward: return detail::InnerOptimizer::backward;
+    case Optimizer::greedy: return detail::InnerOptimizer::greedy;
+    case Optimizer::best: break;
+  }
+  return detail::InnerOptimizer::best;
+}
+Optimizer from_detail(detail::InnerOptimizer o) {
+  switch (o) {
+    case detail::InnerOptimizer::forward: return Optimizer::forward;
+    case detail::InnerOptimizer::backward: return Optimizer::backward;
+    case detail::InnerOptimizer::greedy: return Optimizer::greedy;
+    case detail::InnerOptimizer::best: break;
+  }
+  return Optimizer::best;
+}
+
+// Indices of `points` (canonical) in `level` (canonical subset), or ~0u.
+std::vector<std::uint32_t> index_in(const std::vector<GridPoint>& points, const std::vector<GridPoint>& level) {
+  std::vector<std::uint32_t> idx(points.size(), ~0u);
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    while (j < level.size() && level[j] < points[i]) ++j;
+    if (j < level.size() && level[j] == points[i]) idx[i] = static_cast<std::uint32_t>(j);
+  }
+  return idx;
+}
+
+// Reconstruction side information and result for one level.
+void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
+                         const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
+                         Fidelity fidelity, bool coarser) {
+  const auto idx = index_in(fine_points, plan.points);
+  std::vector<Triangle> faces;  // input faces whose vertices all survive, on this level
+  for (const auto& f : fine.surface)
+    if (idx[f[0]] != ~0u && idx[f[1]] != ~0u && idx[f[2]] != ~0u) faces.push_back({idx[f[0]], idx[f[1]], idx[f[2]]});
+  TuneInput ti;
+  if (!fine.surface.empty()) ti.truth = truth_labels(plan.points, dt, fine_gp, fine.surface, faces);
+  if (kind == Kind::surface)
+    for (auto v : fine.border)
+      if (idx[v] != ~0u) ti.border.push_back(idx[v]);
+  ti.surface_points = &fine_gp;
+  ti.surface = &fine.surface;
+  // Coarser levels only approximate the input; exact fidelity still follows it.
+  ti.approximate = coarser && fidelity != Fidelity::exact;
+  TuningReport tr;
+  plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
+  plan.rec = reconstruct(plan.points, dt, kind, plan.params);
+  plan.report.label_corrections = plan.params.toggles.size();
+  plan.report.rule_mismatches = tr.mismatches_before_toggles;
+}
+
 Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   check_connectivity(input);
+  if (options.levels < 1 || options.levels > static_cast<int>(kMaxLevels))
+    fail(Status::invalid_argument, "levels must be between 1 and 64, got " + std::to_string(options.levels));
+  if (!(options.removal_ratio > 0 && options.removal_ratio <= 1))
+    fail(Status::invalid_argument, "removal ratio must be in (0, 1]");
   Encoded out;
   EncodeReport& rep = out.report;
   rep.kind = options.kind ? *options.kind : detect_kind(input);
   if (static_cast<int>(rep.kind) > 2) fail(Status::invalid_argument, "unknown kind");
   rep.quantizer = fit_quantizer(input.points, options.bits);
+  const int q = rep.quantizer.bits;
   const auto quantized = quantize(input.points, rep.quantizer);
-  out.points = quantized;
-  sort_canonical(out.points);
-  out.points.erase(std::unique(out.points.begin(), out.points.end()), out.points.end());
+  std::vector<GridPoint> fine_points = quantized;
+  sort_canonical(fine_points);
+  fine_points.erase(std::unique(fine_points.begin(), fine_points.end()), fine_points.end());
   rep.input_points = input.points.size();
-  rep.distinct_points = out.points.size();
+  rep.distinct_points = fine_points.size();
   rep.duplicates_merged = rep.input_points - rep.distinct_points;
+
+  const InputOnGrid fine = input_on_grid(input, quantized, fine_points);
+  std::vector<Vec3> fine_gp(fine_points.size());
+  for (std::size_t i = 0; i < fine_gp.size(); ++i)
+    fine_gp[i] = {double(fine_points[i][0]), double(fine_points[i][1]), double(fine_points[i][2])};
+
+  // Plan the levels, finest first.
+  std::vector<LevelPlan> plans;
+  DecimationState state;
+  std::vector<GridPoint> current = fine_points;
+  for (int k = 0; k < options.levels; ++k) {
+    LevelPlan plan;
+    plan.points = std::move(current);
+    current.clear();
+    plan.report.lod = k;
+    const bool more = k + 1 < options.levels && plan.points.size() > 4;
+    Tetrahedralization dt;
+    if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
+    if (rep.kind != Kind::points) plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity, k > 0);
+    if (more) {
+      LevelMesh mesh;
+      mesh.points = &plan.points;
+      DecimationOptions dopt;
+      dopt.kind = rep.kind == Kind::surface ? Kind::surface : Kind::volume;
+      if (rep.kind == Kind::surface) {
+        mesh.triangles = plan.rec.triangles;
+      } else {
+        // Points are decimated as the volume their Delaunay tetrahedra fill.
+        mesh.tetrahedra = rep.kind == Kind::volume ? plan.rec.tetrahedra : dt.tets;
+      }
+      dopt.target_ratio = options.removal_ratio;
+      dopt.boundary = to_detail(options.boundary_mode);
+      dopt.optimizer = to_detail(options.optimizer);
+      dopt.level = k;
+      const DecimationResult dr = decimate(mesh, dopt, state);
+      auto& lr = plan.report;
+      lr.boundary_removed = dr.boundary_removed;
+      lr.inner_removed = dr.inner_removed;
+      lr.classification_disagreements = dr.classification.disagreements;
+      lr.dmax = dr.dmax;
+      lr.optimizer = from_detail(dr.chosen);
+      lr.mean_importance_retained = dr.mean_ip_retained;
+      for (const auto& l : dr.layers) lr.layer_sizes.push_back(l.vertices);
+      for (std::size_t i = 0; i < plan.points.size(); ++i)
+        (dr.removed[i] ? plan.added : current).push_back(plan.points[i]);
+      if (plan.added.empty()) current.clear();
+    }
+    plan.report.simplices = rep.kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
+    plans.push_back(std::move(plan));
+    if (current.empty()) break;
+  }
+  // The coarsest level adds nothing to a coarser one.
+  plans.back().added.clear();
 
   Header header;
   header.kind = rep.kind;
-  header.points = {rep.distinct_points};
+  for (auto it = plans.rbegin(); it != plans.rend(); ++it) header.points.push_back(it->points.size());
 
   ContainerWriter w;
   w.chunk(kHead, header.write());
   w.chunk(kScalarQuantizer, write_scalar_quantizer(rep.quantizer));
   if (options.write_info) w.chunk(kInfo, info_payload(rep));
-
-  const std::size_t before = w.size();
-  ByteWriter base;
-  base.u8(static_cast<std::uint8_t>(BaseCoder::octree));
-  base.bytes(encode_octree(out.points, rep.quantizer.bits));
-  w.chunk(kBaseLayer, base.data());
-  LevelReport level;
-  level.lod = 0;
-  level.points = level.new_points = rep.distinct_points;
-  level.layer_bytes = w.size() - before;
-
-  if (rep.kind != Kind::points) {
-    const auto grid = input_on_grid(input, quantized, out.points);
-    const auto dt = delaunay(out.points);
-    std::vector<Vec3> gp(out.points.size());
-    for (std::size_t i = 0; i < gp.size(); ++i)
-      gp[i] = {double(out.points[i][0]), double(out.points[i][1]), double(out.points[i][2])};
-    std::vector<std::uint8_t> truth;
-    if (!grid.surface.empty()) truth = truth_labels(out.points, dt, gp, grid.surface, grid.surface);
-    TuningReport tr;
-    TuneInput ti;
-    ti.truth = std::move(truth);
-    if (rep.kind == Kind::surface) ti.border = grid.border;
-    ti.surface_points = &gp;
-    ti.surface = &grid.surface;
-    const ReconParams params = tune(out.points, dt, rep.kind, ti, options.fidelity, &tr);
-    const std::size_t side_start = w.size();
-    w.chunk(kRecon, write_recon(params));
-    level.side_bytes = w.size() - side_start;
-    level.label_corrections = params.toggles.size();
-    level.rule_mismatches = tr.mismatches_before_toggles;
-    auto rec = reconstruct(out.points, dt, rep.kind, params);
-    out.triangles = std::move(rec.triangles);
-    out.tetrahedra = std::move(rec.tetrahedra);
+  for (std::size_t i = plans.size(); i-- > 0;) {
+    LevelPlan& plan = plans[i];
+    LevelReport& level = plan.report;
+    const std::size_t before = w.size();
+    ByteWriter layer;
+    if (i + 1 == plans.size()) {
+      layer.u8(static_cast<std::uint8_t>(BaseCoder::octree));
+      layer.bytes(encode_octree(plan.points, q));
+      w.chunk(kBaseLayer, layer.data());
+      level.new_points = plan.points.size();
+    } else {
+      layer.u8(static_cast<std::uint8_t>(RefineCoder::conditional_octree));
+      layer.bytes(encode_refinement(plans[i + 1].points, plans[i].added, q));
+      w.chunk(kRefinement, layer.data());
+      level.new_points = plans[i].added.size();
+    }
+    level.points = plan.points.size();
+    level.layer_bytes = w.size() - before;
+    if (rep.kind != Kind::points) {
+      const std::size_t side_start = w.size();
+      w.chunk(kRecon, write_recon(plan.params));
+      level.side_bytes = w.size() - side_start;
+    }
+    level.stream_bytes = w.size();
+    rep.levels.push_back(level);
+    DecodedLevel dl;
+    dl.lod = level.lod;
+    dl.points = plan.points;
+    dl.triangles = plan.rec.triangles;
+    dl.tetrahedra = plan.rec.tetrahedra;
+    dl.stream_bytes = level.stream_bytes;
+    out.levels.push_back(std::move(dl));
   }
-  level.stream_bytes = w.size();
-  rep.levels.push_back(level);
-
   w.chunk(kEnd, {});
   out.bytes = w.finish();
   rep.total_bytes = out.bytes.size();
+  out.points = std::move(plans.front().points);
+  out.triangles = std::move(plans.front().rec.triangles);
+  out.tetrahedra = std::move(plans.front().rec.tetrahedra);
   return out;
 }
 
@@ -175,6 +301,25 @@ const char* kind_name(Kind k) noexcept {
 }
 
 const char* version_string() noexcept { return HMC_VERSION_STRING; }
+
+const char* boundary_mode_name(hmc::BoundaryMode m) noexcept {
+  switch (m) {
+    case hmc::BoundaryMode::constant: return "constant";
+    case hmc::BoundaryMode::linear: return "linear";
+    case hmc::BoundaryMode::adaptive: return "adaptive";
+  }
+  return "unknown";
+}
+
+const char* optimizer_name(Optimizer o) noexcept {
+  switch (o) {
+    case Optimizer::forward: return "forward";
+    case Optimizer::backward: return "backward";
+    case Optimizer::greedy: return "greedy";
+    case Optimizer::best: return "best";
+  }
+  return "unknown";
+}
 
 Result<Encoded> encode(const Mesh& input, const EncodeOptions& options) {
   return guarded<Result<Encoded>>([&] { return Result<Encoded>(encode_impl(input, options)); });

@@ -21,8 +21,8 @@ void expect_consumed(const ByteReader& r, const ChunkView& c) {
 }  // namespace
 
 bool is_known_chunk(const ChunkType& t) {
-  return t == kHead || t == kScalarQuantizer || t == kVectorQuantizer || t == kBaseLayer || t == kRecon || t == kEnd ||
-         t == kInfo;
+  return t == kHead || t == kScalarQuantizer || t == kVectorQuantizer || t == kBaseLayer || t == kRefinement ||
+         t == kRecon || t == kEnd || t == kInfo;
 }
 
 std::vector<std::uint8_t> Header::write() const {

@@ -19,6 +19,7 @@ inline constexpr ChunkType kScalarQuantizer = chunk_type("SQNT");
 inline constexpr ChunkType kVectorQuantizer = chunk_type("VQTB");
 inline constexpr ChunkType kBaseLayer = chunk_type("BASE");
 inline constexpr ChunkType kRecon = chunk_type("RCON");
+inline constexpr ChunkType kRefinement = chunk_type("REFN");
 inline constexpr ChunkType kEnd = chunk_type("HEND");
 inline constexpr ChunkType kInfo = chunk_type("info");
 
@@ -54,5 +55,7 @@ constexpr std::uint32_t kMaxScaleRank = 64;
 
 /// Base-layer coders (first byte of BASE).
 enum class BaseCoder : std::uint8_t { octree = 0 };
+/// Refinement-layer coders (first byte of REFN).
+enum class RefineCoder : std::uint8_t { conditional_octree = 0 };
 
 }  // namespace hmc::detail

@@ -42,6 +42,10 @@ ScalarQuantizer fit_quantizer(const std::vector<Vec3>& points, int q) {
     if (!std::isfinite(e)) fail(Status::invalid_argument, "the coordinate range overflows binary64");
     extent = std::max(extent, e);
   }
+  // -0.0 and +0.0 compare equal, so which one min() keeps depends on the
+  // input order; take +0.0 so that the stream codes the set, not the order.
+  for (double& o : lo)
+    if (o == 0) o = 0.0;
   ScalarQuantizer sq;
   sq.bits = q;
   sq.origin = lo;

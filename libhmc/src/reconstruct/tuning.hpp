@@ -42,6 +42,13 @@ struct TuneInput {
   std::vector<std::uint32_t> border;   ///< border vertices of an open surface (sorted)
   const std::vector<Vec3>* surface_points = nullptr;    ///< grid units
   const std::vector<Triangle>* surface = nullptr;       ///< the input surface, for hole faces
+  /// Fidelity::shape leaves mismatched tetrahedra thinner than this (grid
+  /// units) to the rule; negative: 0.1% of the bounding-box diagonal.
+  double shape_tolerance = -1;
+  /// A coarser level, which only approximates the input: instead of
+  /// following `truth`, keep the rule's labels and correct only what makes
+  /// the surface unsound (vertices left off it, non-manifold edges).
+  bool approximate = false;
 };
 
 /// Side information for `in.truth`: alpha classes, peeling, the border

@@ -1,0 +1,629 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+#include "pointset/refine.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <optional>
+#include <string>
+
+#include "entropy/huffman.hpp"
+#include "pointset/octree.hpp"
+#include "util/error.hpp"
+#include "util/radix_sort.hpp"
+
+namespace hmc::detail {
+
+namespace {
+
+constexpr int kMaxNeighbours = 15;        // 4-bit header field
+constexpr int kMaxClasses = 4;            // 2-bit header field
+constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
+const char* const kWhat = "refinement layer";
+
+int popcount8(unsigned v) {
+  int n = 0;
+  for (; v; v &= v - 1) ++n;
+  return n;
+}
+
+// Non-zero occupancies ordered by number of set bits, then value. Bit r of a
+// ranked occupancy is the child of rank r, so likely symbols get small
+// indices and code-length tables end in one long zero run.
+struct OccupancyOrder {
+  std::array<std::uint8_t, 256> index{};
+  std::array<std::uint8_t, kAlphabet> occupancy{};
+  OccupancyOrder() {
+    int n = 0;
+    for (int bits = 1; bits <= 8; ++bits)
+      for (unsigned o = 1; o < 256; ++o)
+        if (popcount8(o) == bits) {
+          index[o] = static_cast<std::uint8_t>(n);
+          occupancy[static_cast<std::size_t>(n++)] = static_cast<std::uint8_t>(o);
+        }
+  }
+};
+
+const OccupancyOrder& occupancy_order() {
+  static const OccupancyOrder order;
+  return order;
+}
+
+using Vec = std::array<std::int64_t, 3>;
+using Point32 = std::array<std::int32_t, 3>;
+
+std::uint64_t distance2(const Point32& p, const Vec& c) {
+  std::uint64_t d2 = 0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const std::int64_t t = p[a] - c[a];
+    d2 += static_cast<std::uint64_t>(t * t);
+  }
+  return d2;
+}
+
+// Exact k-nearest-neighbour search over the coarse points, in doubled grid
+// coordinates (so that cell centres are integers). Equal distances go to the
+// smaller canonical index, so every decoder picks the same neighbours.
+class NeighbourIndex {
+ public:
+  struct Hit {
+    std::uint64_t d2;
+    std::uint32_t index;  // canonical index: breaks ties
+    std::uint32_t slot;   // position in tree order: where the point is stored
+    bool operator<(const Hit& o) const { return d2 != o.d2 ? d2 < o.d2 : index < o.index; }
+  };
+
+  explicit NeighbourIndex(const std::vector<GridPoint>& points) {
+    entries_.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+      entries_[i] = {{static_cast<std::int32_t>(2 * points[i][0]), static_cast<std::int32_t>(2 * points[i][1]),
+                      static_cast<std::int32_t>(2 * points[i][2])},
+                     static_cast<std::uint32_t>(i)};
+    if (!entries_.empty()) build(0, static_cast<std::uint32_t>(entries_.size()));
+  }
+
+  /// The min(k, size) nearest points to `c`, ascending; returns their number.
+  int nearest(const Vec& c, int k, Hit* hits) const {
+    int count = 0;
+    if (k > 0 && !nodes_.empty()) search(0, c, k, hits, count);
+    return count;
+  }
+
+  /// The hit for the point stored at `slot`, seen from `c`.
+  Hit hit(std::uint32_t slot, const Vec& c) const { return {distance2(entries_[slot].at, c), entries_[slot].index, slot}; }
+  const Point32& at(std::uint32_t slot) const { return entries_[slot].at; }
+
+  /// Keeps the k smallest hits, sorted.
+  static void insert(const Hit& h, int k, Hit* hits, int& count) {
+    if (count == k && !(h < hits[k - 1])) return;
+    int j = count < k ? count++ : k - 1;
+    for (; j > 0 && h < hits[j - 1]; --j) hits[j] = hits[j - 1];
+    hits[j] = h;
+  }
+
+ private:
+  static constexpr std::uint32_t kLeaf = 8;
+  // Points in tree order, so that a leaf's points are contiguous.
+  struct Entry {
+    Point32 at;           // doubled coordinates (< 2^22)
+    std::uint32_t index;  // canonical index
+  };
+  struct Node {
+    Point32 lo, hi;             // bounding box
+    std::uint32_t begin, end;   // its points: entries_[begin, end)
+    std::uint32_t right;        // right child; the left one follows the node; 0 for a leaf
+  };
+
+  std::uint32_t build(std::uint32_t begin, std::uint32_t end) {
+    const auto id = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.emplace_back();
+    Node n{entries_[begin].at, entries_[begin].at, begin, end, 0};
+    for (std::uint32_t i = begin; i < end; ++i)
+      for (std::size_t a = 0; a < 3; ++a)
+        n.lo[a] = std::min(n.lo[a], entries_[i].at[a]), n.hi[a] = std::max(n.hi[a], entries_[i].at[a]);
+    if (end - begin > kLeaf) {
+      std::size_t axis = 0;
+      for (std::size_t a = 1; a < 3; ++a)
+        if (n.hi[a] - n.lo[a] > n.hi[axis] - n.lo[axis]) axis = a;
+      const std::uint32_t mid = begin + (end - begin) / 2;
+      std::nth_element(entries_.begin() + begin, entries_.begin() + mid, entries_.begin() + end,
+                       [axis](const Entry& x, const Entry& y) {
+                         return x.at[axis] != y.at[axis] ? x.at[axis] < y.at[axis] : x.index < y.index;
+                       });
+      build(begin, mid);
+      n.right = build(mid, end);
+    }
+    nodes_[id] = n;
+    return id;
+  }
+
+  static std::uint64_t box_d2(const Node& n, const Vec& c) {
+    std::uint64_t d2 = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const std::int64_t t = c[a] < n.lo[a] ? n.lo[a] - c[a] : c[a] > n.hi[a] ? c[a] - n.hi[a] : 0;
+      d2 += static_cast<std::uint64_t>(t * t);
+    }
+    return d2;
+  }
+
+  void search(std::uint32_t id, const Vec& c, int k, Hit* hits, int& count) const {
+    const Node& n = nodes_[id];
+    if (n.right == 0) {
+      for (std::uint32_t i = n.begin; i < n.end; ++i) insert(hit(i, c), k, hits, count);
+      return;
+    }
+    // Nearer child first. Only strictly farther boxes are skipped: a point
+    // at the same distance with a smaller index must still replace the last hit.
+    std::uint32_t first = id + 1, second = n.right;
+    std::uint64_t d_first = box_d2(nodes_[first], c), d_second = box_d2(nodes_[second], c);
+    if (d_second < d_first) std::swap(first, second), std::swap(d_first, d_second);
+    if (count < k || d_first <= hits[k - 1].d2) search(first, c, k, hits, count);
+    if (count < k || d_second <= hits[k - 1].d2) search(second, c, k, hits, count);
+  }
+
+  std::vector<Entry> entries_;
+  std::vector<Node> nodes_;
+};
+
+// sign(x) * floor(|x| / 2^s) for every value, with the smallest s that makes
+// all magnitudes fit in `bits` bits: keeps the products below exact.
+template <std::size_t N>
+void reduce(std::array<std::int64_t, N>& v, int bits) {
+  std::uint64_t m = 0;
+  for (std::int64_t x : v) m = std::max(m, static_cast<std::uint64_t>(x < 0 ? -x : x));
+  int len = 0;
+  while (len < 64 && (m >> len) != 0) ++len;
+  const int s = std::max(0, len - bits);
+  for (std::int64_t& x : v) x = x < 0 ? -((-x) >> s) : x >> s;
+}
+
+// The coarse level as the coder sees it: which children of a node hold
+// coarse points, and the ranking of the children from the plane through the
+// node's nearest coarse points.
+class CoarseLevel {
+ public:
+  static constexpr int kSpare = 4;
+  static constexpr int kMaxCandidates = kMaxNeighbours + kSpare;
+
+  /// Neighbour candidates handed down a chain of nodes: every coarse point
+  /// not listed lies at least `reach` (doubled units) from `centre`.
+  struct Candidates {
+    Vec centre{};
+    double reach = 0;
+    int count = 0;
+    std::array<std::uint32_t, kMaxCandidates> slot{};
+  };
+
+  CoarseLevel(const std::vector<GridPoint>& canonical, int q) : q_(q), index_(canonical) {
+    keys_.resize(canonical.size());
+    for (std::size_t i = 0; i < canonical.size(); ++i) keys_[i] = morton_key(canonical[i], q);
+    radix_sort(keys_, 3 * q);
+  }
+
+  std::uint32_t size() const { return static_cast<std::uint32_t>(keys_.size()); }
+  /// K, the number of neighbours that predict a node's children.
+  void set_neighbours(int k) { neighbours_ = k; }
+
+  /// Boundaries of the coarse points of the eight children of a node at
+  /// depth d holding keys_[c0, c1): child c holds keys_[b[c], b[c + 1]).
+  void split(int d, std::uint64_t key, std::uint32_t c0, std::uint32_t c1, std::array<std::uint32_t, 9>& b) const {
+    b[0] = c0;
+    b[8] = c1;
+    const int shift = 3 * (q_ - d - 1);
+    for (std::size_t c = 1; c < 8; ++c) {
+      const std::uint64_t first = ((key << 3) | c) << shift;
+      b[c] = c0 == c1 ? c0
+                      : static_cast<std::uint32_t>(
+                            std::lower_bound(keys_.begin() + b[c - 1], keys_.begin() + c1, first) - keys_.begin());
+    }
+  }
+
+  /// order[r] = the child of rank r: children holding coarse points first,
+  /// then by distance of the child's centre to the plane fitted to the
+  /// node's nearest coarse points, then by distance to their centroid, then
+  /// by child number. `inherited` are the parent's candidates (or null);
+  /// returns those for the node's children: `inherited` or `fresh`.
+  const Candidates* rank(int d, std::uint64_t key, unsigned coarse_mask, const Candidates* inherited,
+                         Candidates& fresh, std::array<int, 8>& order) {
+    const GridPoint p = morton_point(key, d);
+    const std::int64_t h = std::int64_t{1} << (q_ - d);  // node side
+    const Vec centre{2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h, 2 * std::int64_t{p[2]} * h + h};
+    int k = 0;
+    const Candidates* handed = neighbours(centre, inherited, fresh, k);
+
+    Vec s{0, 0, 0};
+    std::array<std::int64_t, 6> ss{};  // xx yy zz xy xz yz
+    for (int i = 0; i < k; ++i) {
+      const Point32& g = index_.at(hits_[static_cast<std::size_t>(i)].slot);
+      for (std::size_t a = 0; a < 3; ++a) s[a] += g[a];
+      ss[0] += std::int64_t{g[0]} * g[0], ss[1] += std::int64_t{g[1]} * g[1], ss[2] += std::int64_t{g[2]} * g[2];
+      ss[3] += std::int64_t{g[0]} * g[1], ss[4] += std::int64_t{g[0]} * g[2], ss[5] += std::int64_t{g[1]} * g[2];
+    }
+    // k^2 times the covariance; the dominant column of its adjugate is (up to
+    // the reductions that keep it exact in 64 bits) the normal of the plane
+    // that fits the neighbours best, and 0 for a single neighbour.
+    std::array<std::int64_t, 6> m{k * ss[0] - s[0] * s[0], k * ss[1] - s[1] * s[1], k * ss[2] - s[2] * s[2],
+                                  k * ss[3] - s[0] * s[1], k * ss[4] - s[0] * s[2], k * ss[5] - s[1] * s[2]};
+    reduce(m, 31);
+    const std::int64_t xx = m[0], yy = m[1], zz = m[2], xy = m[3], xz = m[4], yz = m[5];
+    const std::array<std::int64_t, 3> diag{yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy};
+    const std::int64_t axy = xz * yz - xy * zz, axz = xy * yz - xz * yy, ayz = xy * xz - xx * yz;
+    std::size_t j = 0;
+    for (std::size_t a = 1; a < 3; ++a)
+      if (diag[a] > diag[j]) j = a;
+    std::array<std::int64_t, 3> n = j == 0 ? std::array<std::int64_t, 3>{diag[0], axy, axz}
+                                    : j == 1 ? std::array<std::int64_t, 3>{axy, diag[1], ayz}
+                                             : std::array<std::int64_t, 3>{axz, ayz, diag[2]};
+    reduce(n, 20);
+
+    std::array<std::int64_t, 8> t{}, e{};
+    for (std::size_t c = 0; c < 8; ++c) {
+      std::int64_t dot = 0, len = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        const std::int64_t bit = (c >> (2 - a)) & 1;
+        const std::int64_t v = k * ((2 * std::int64_t{p[a]} + bit) * h + h / 2) - s[a];
+        dot += n[a] * v;
+        len += v * v;
+      }
+      t[c] = dot < 0 ? -dot : dot;
+      e[c] = len;
+    }
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      const unsigned ca = (coarse_mask >> a) & 1u, cb = (coarse_mask >> b) & 1u;
+      if (ca != cb) return ca > cb;
+      const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+      if (t[ua] != t[ub]) return t[ua] < t[ub];
+      if (e[ua] != e[ub]) return e[ua] < e[ub];
+      return a < b;
+    });
+    return handed;
+  }
+
+ private:
+  static constexpr double kInfinity = 1e300;
+
+  // Fills hits_ with the k nearest coarse points to `centre`. They come from
+  // the inherited candidates when these provably hold them (deep nodes move
+  // little from their parent), else from a search that keeps a few spare
+  // points for the node's descendants. Only speed depends on the candidates.
+  const Candidates* neighbours(const Vec& centre, const Candidates* inherited, Candidates& fresh, int& count) {
+    const int k = neighbours_;
+    count = 0;
+    if (k == 0) return nullptr;
+    if (inherited) {
+      for (int i = 0; i < inherited->count; ++i)
+        NeighbourIndex::insert(index_.hit(inherited->slot[static_cast<std::size_t>(i)], centre), k, hits_.data(),
+                               count);
+      if (inherited->reach == kInfinity) return inherited;  // it lists every coarse point
+      std::uint64_t shift2 = 0;
+      for (std::size_t a = 0; a < 3; ++a)
+        shift2 += static_cast<std::uint64_t>((centre[a] - inherited->centre[a]) * (centre[a] - inherited->centre[a]));
+      // Points not listed are at least reach - shift away; the margin is far
+      // above the rounding error of these doubles (values below 2^25).
+      const double kth = std::sqrt(static_cast<double>(hits_[static_cast<std::size_t>(k) - 1].d2));
+      if (kth + std::sqrt(static_cast<double>(shift2)) + 1e-6 < inherited->reach) return inherited;
+    }
+    std::array<NeighbourIndex::Hit, kMaxCandidates> all{};
+    const int n = index_.nearest(centre, k + kSpare, all.data());
+    fresh.centre = centre;
+    fresh.count = n;
+    fresh.reach = n < k + kSpare ? kInfinity : std::sqrt(static_cast<double>(all[static_cast<std::size_t>(n) - 1].d2));
+    for (int i = 0; i < n; ++i) fresh.slot[static_cast<std::size_t>(i)] = all[static_cast<std::size_t>(i)].slot;
+    count = std::min(n, k);
+    std::copy_n(all.begin(), count, hits_.begin());
+    return &fresh;
+  }
+
+  int q_;
+  int neighbours_ = 0;
+  NeighbourIndex index_;
+  std::vector<std::uint64_t> keys_;  // Morton keys of the coarse points, ascending
+  std::array<NeighbourIndex::Hit, kMaxNeighbours> hits_{};
+};
+
+void check_grid(const std::vector<GridPoint>& points, int q, const char* name) {
+  for (const GridPoint& p : points)
+    if ((p[0] | p[1] | p[2]) >> q)
+      fail(Status::invalid_argument, std::string(kWhat) + ": a " + name + " point lies outside the 2^" +
+                                         std::to_string(q) + " grid");
+}
+
+void check_coarse(const std::vector<GridPoint>& coarse, int q) {
+  if (q < 1 || q > 21) fail(Status::invalid_argument, std::string(kWhat) + ": q must be 1..21");
+  if (coarse.empty()) fail(Status::invalid_argument, std::string(kWhat) + ": the coarse level is empty");
+  if (coarse.size() >= (std::size_t{1} << 32) - 1)
+    fail(Status::invalid_argument, std::string(kWhat) + ": too many coarse points");
+  check_grid(coarse, q, "coarse");
+  for (std::size_t i = 1; i < coarse.size(); ++i)
+    if (!(coarse[i - 1] < coarse[i]))
+      fail(Status::invalid_argument, std::string(kWhat) + ": coarse points not distinct and in canonical order");
+}
+
+// The nodes of the added points' octree are visited depth first (a node,
+// then the subtrees of its occupied children in child order): the decoder
+// then keeps one path of nodes, and consecutive nodes share neighbours.
+
+// ---------------------------------------------------------------- encoder
+
+// One coded node: its depth, how many of its children hold coarse points
+// (the context) and its symbol.
+struct Symbol {
+  std::uint8_t depth, weight, index;
+};
+
+class Traversal {
+ public:
+  Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q) : coarse_(coarse), added_(added), q_(q) {
+    visit(0, 0, 0, coarse.size(), 0, static_cast<std::uint32_t>(added.size()), nullptr);
+  }
+  std::vector<Symbol> symbols;
+
+ private:
+  void visit(int d, std::uint64_t key, std::uint32_t c0, std::uint32_t c1, std::uint32_t a0, std::uint32_t a1,
+             const CoarseLevel::Candidates* inherited) {
+    std::array<std::uint32_t, 9> cb{}, ab{};
+    coarse_.split(d, key, c0, c1, cb);
+    const int shift = 3 * (q_ - d - 1);
+    ab[0] = a0;
+    for (std::uint32_t c = 0, i = a0; c < 8; ++c) {
+      while (i < a1 && ((added_[i] >> shift) & 7u) == c) ++i;
+      ab[c + 1] = i;
+    }
+    unsigned mask = 0, occ = 0;
+    for (std::size_t c = 0; c < 8; ++c) {
+      if (cb[c + 1] > cb[c]) mask |= 1u << c;
+      if (ab[c + 1] > ab[c]) occ |= 1u << c;
+    }
+    CoarseLevel::Candidates fresh;
+    std::array<int, 8> order{};
+    const CoarseLevel::Candidates* handed = coarse_.rank(d, key, mask, inherited, fresh, order);
+    unsigned ranked = 0;
+    for (std::size_t r = 0; r < 8; ++r) ranked |= ((occ >> order[r]) & 1u) << r;
+    symbols.push_back({static_cast<std::uint8_t>(d), static_cast<std::uint8_t>(popcount8(mask)),
+                       occupancy_order().index[ranked]});
+    if (d + 1 == q_) return;
+    for (std::size_t c = 0; c < 8; ++c)
+      if (occ & (1u << c)) visit(d + 1, (key << 3) | c, cb[c], cb[c + 1], ab[c], ab[c + 1], handed);
+  }
+
+  CoarseLevel& coarse_;
+  const std::vector<std::uint64_t>& added_;
+  int q_;
+};
+
+// Bits of a code-length table plus the symbols it codes.
+std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
+  const HuffmanCode code = HuffmanCode::from_frequencies(freq);
+  BitWriter w;
+  code.write(w);
+  return w.bit_count() + code.cost(freq);
+}
+
+// Which table each (depth, class) slot uses. Per class, consecutive depths
+// share a table when that costs fewer bits than a table of their own.
+struct TablePlan {
+  int classes = 1;
+  std::vector<bool> fresh;                       // [d * classes + k]: a table is sent
+  std::vector<int> table;                        // [d * classes + k]: the table used, -1 for none
+  std::vector<std::vector<std::uint64_t>> freq;  // per table
+  std::uint64_t bits = 0;                        // header, tables and symbols
+};
+
+// freq9[(d * 9 + w) * kAlphabet + s]: symbols s at depth d of nodes with w
+// children holding coarse points.
+TablePlan plan_tables(const std::vector<std::uint64_t>& freq9, int q, int classes) {
+  TablePlan plan;
+  plan.classes = classes;
+  const auto slots = static_cast<std::size_t>(q * classes);
+  plan.fresh.assign(slots, false);
+  plan.table.assign(slots, -1);
+  plan.bits = 6 + slots;  // header fields, one flag per slot
+  std::vector<std::uint64_t> f(kAlphabet);
+  for (int k = 0; k < classes; ++k) {
+    int current = -1;
+    std::uint64_t current_bits = 0;
+    for (int d = 0; d < q; ++d) {
+      std::fill(f.begin(), f.end(), 0);
+      bool used = false;
+      for (int w = k; w <= (k == classes - 1 ? 8 : k); ++w)
+        for (std::size_t s = 0; s < kAlphabet; ++s) {
+          const std::uint64_t x = freq9[(static_cast<std::size_t>(d) * 9 + static_cast<std::size_t>(w)) * kAlphabet + s];
+          f[s] += x;
+          used = used || x;
+        }
+      const auto slot = static_cast<std::size_t>(d * classes + k);
+      plan.table[slot] = current;
+      if (!used) continue;
+      const std::uint64_t alone = code_bits(f);
+      if (current >= 0) {
+        std::vector<std::uint64_t> merged = plan.freq[static_cast<std::size_t>(current)];
+        for (std::size_t s = 0; s < kAlphabet; ++s) merged[s] += f[s];
+        const std::uint64_t together = code_bits(merged);
+        if (together - current_bits <= alone) {
+          plan.freq[static_cast<std::size_t>(current)] = std::move(merged);
+          current_bits = together;
+          continue;
+        }
+        plan.bits += current_bits;
+      }
+      current = static_cast<int>(plan.freq.size());
+      plan.freq.push_back(f);
+      current_bits = alone;
+      plan.fresh[slot] = true;
+      plan.table[slot] = current;
+    }
+    if (current >= 0) plan.bits += current_bits;
+  }
+  return plan;
+}
+
+std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const TablePlan& plan, int neighbours) {
+  std::vector<HuffmanCode> codes;
+  for (const auto& f : plan.freq) codes.push_back(HuffmanCode::from_frequencies(f));
+  BitWriter w;
+  w.put(static_cast<std::uint32_t>(neighbours), 4);
+  w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
+  for (std::size_t slot = 0; slot < plan.fresh.size(); ++slot) {
+    w.put(plan.fresh[slot] ? 1u : 0u, 1);
+    if (plan.fresh[slot]) codes[static_cast<std::size_t>(plan.table[slot])].write(w);
+  }
+  for (const Symbol& s : symbols) {
+    const int k = std::min<int>(s.weight, plan.classes - 1);
+    codes[static_cast<std::size_t>(plan.table[static_cast<std::size_t>(s.depth * plan.classes + k)])].encode(w, s.index);
+  }
+  return w.finish();
+}
+
+std::vector<std::uint8_t> encode_impl(const std::vector<GridPoint>& coarse_in, const std::vector<GridPoint>& added_in,
+                                      int q, const RefinementParams* forced) {
+  if (q < 1 || q > 21) fail(Status::invalid_argument, std::string(kWhat) + ": q must be 1..21");
+  // The coarse level's canonical order breaks neighbour ties; accept any order here.
+  std::vector<GridPoint> coarse = coarse_in;
+  sort_canonical(coarse);
+  check_coarse(coarse, q);
+  check_grid(added_in, q, "added");
+  if (added_in.size() >= (std::size_t{1} << 32) - 1)
+    fail(Status::invalid_argument, std::string(kWhat) + ": too many added points");
+  if (forced && (forced->neighbours < 0 || forced->neighbours > kMaxNeighbours || forced->classes < 1 ||
+                 forced->classes > kMaxClasses))
+    fail(Status::invalid_argument, std::string(kWhat) + ": parameters out of range");
+  if (added_in.empty()) return {};
+
+  std::vector<std::uint64_t> added(added_in.size());
+  for (std::size_t i = 0; i < added.size(); ++i) added[i] = morton_key(added_in[i], q);
+  radix_sort(added, 3 * q);
+  for (std::size_t i = 1; i < added.size(); ++i)
+    if (added[i] == added[i - 1]) fail(Status::invalid_argument, std::string(kWhat) + ": added points not distinct");
+  for (std::uint64_t key : added)
+    if (std::binary_search(coarse.begin(), coarse.end(), morton_point(key, q)))
+      fail(Status::invalid_argument, std::string(kWhat) + ": an added point is also a coarse point");
+
+  // The plane through 4 neighbours suits surfaces; the nearest point alone
+  // suits volume interiors. Try both and keep the smaller stream.
+  std::vector<int> choices{4, 1};
+  if (forced) choices = {forced->neighbours};
+  else if (coarse.size() == 1) choices = {1};
+  std::vector<std::uint8_t> best;
+  CoarseLevel level(coarse, q);
+  for (int neighbours : choices) {
+    level.set_neighbours(neighbours);
+    const Traversal traversal(level, added, q);
+    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 9 * kAlphabet, 0);
+    for (const Symbol& s : traversal.symbols)
+      ++freq[(static_cast<std::size_t>(s.depth) * 9 + s.weight) * kAlphabet + s.index];
+    TablePlan plan;
+    bool planned = false;
+    for (int classes = 1; classes <= kMaxClasses; ++classes) {
+      if (forced && classes != forced->classes) continue;
+      TablePlan p = plan_tables(freq, q, classes);
+      if (!planned || p.bits < plan.bits) plan = std::move(p), planned = true;
+    }
+    std::vector<std::uint8_t> bytes = write_layer(traversal.symbols, plan, neighbours);
+    if (best.empty() || bytes.size() < best.size()) best = std::move(bytes);
+  }
+  return best;
+}
+
+// ---------------------------------------------------------------- decoder
+
+class Decoder {
+ public:
+  Decoder(BitReader& in, int q, const std::vector<GridPoint>& coarse, std::uint64_t n_added)
+      : in_(in), q_(q), n_added_(n_added) {
+    neighbours_ = static_cast<int>(in.get(4));
+    classes_ = static_cast<int>(in.get(2)) + 1;
+    table_.assign(static_cast<std::size_t>(q * classes_), -1);
+    for (int d = 0; d < q; ++d)
+      for (int k = 0; k < classes_; ++k) {
+        const auto slot = static_cast<std::size_t>(d * classes_ + k);
+        if (in.get(1)) {
+          codes_.push_back(HuffmanCode::read(
+              in, kAlphabet, std::string(kWhat) + " table for depth " + std::to_string(d) + " class " + std::to_string(k)));
+          table_[slot] = static_cast<int>(codes_.size() - 1);
+        } else if (d > 0) {
+          table_[slot] = table_[slot - static_cast<std::size_t>(classes_)];
+        }
+      }
+    level_.emplace(coarse, q);
+    level_->set_neighbours(neighbours_);
+    visit(0, 0, 0, level_->size(), nullptr);
+  }
+
+  std::vector<std::uint64_t> keys;  // the added points, Morton order
+
+ private:
+  void visit(int d, std::uint64_t key, std::uint32_t c0, std::uint32_t c1, const CoarseLevel::Candidates* inherited) {
+    std::array<std::uint32_t, 9> cb{};
+    level_->split(d, key, c0, c1, cb);
+    unsigned mask = 0;
+    for (std::size_t c = 0; c < 8; ++c)
+      if (cb[c + 1] > cb[c]) mask |= 1u << c;
+    const int k = std::min(popcount8(mask), classes_ - 1);
+    const int t = table_[static_cast<std::size_t>(d * classes_ + k)];
+    if (t < 0)
+      fail(Status::bad_layer, std::string(kWhat) + ": no code for depth " + std::to_string(d) + " class " +
+                                  std::to_string(k));
+    const std::uint32_t ranked = occupancy_order().occupancy[codes_[static_cast<std::size_t>(t)].decode(in_)];
+    CoarseLevel::Candidates fresh;
+    std::array<int, 8> order{};
+    const CoarseLevel::Candidates* handed = level_->rank(d, key, mask, inherited, fresh, order);
+    unsigned occ = 0;
+    for (std::size_t r = 0; r < 8; ++r) occ |= ((ranked >> r) & 1u) << order[r];
+    if (d + 1 == q_) {
+      if (occ & mask) fail(Status::bad_layer, std::string(kWhat) + ": an added point coincides with a coarse point");
+      for (std::uint64_t c = 0; c < 8; ++c)
+        if (occ & (1u << c)) {
+          if (keys.size() == n_added_)
+            fail(Status::bad_layer, std::string(kWhat) + ": more than the declared " + std::to_string(n_added_) +
+                                        " points");
+          keys.push_back((key << 3) | c);
+        }
+      return;
+    }
+    for (std::size_t c = 0; c < 8; ++c)
+      if (occ & (1u << c)) visit(d + 1, (key << 3) | c, cb[c], cb[c + 1], handed);
+  }
+
+  BitReader& in_;
+  int q_;
+  std::uint64_t n_added_;
+  int neighbours_ = 0, classes_ = 1;
+  std::vector<HuffmanCode> codes_;
+  std::vector<int> table_;  // [d * classes + k]: index into codes_, -1 for none
+  std::optional<CoarseLevel> level_;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
+                                            int q) {
+  return encode_impl(coarse, added, q, nullptr);
+}
+
+std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
+                                            int q, const RefinementParams& params) {
+  return encode_impl(coarse, added, q, &params);
+}
+
+std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
+                                         const std::vector<GridPoint>& coarse, std::uint64_t n_added) {
+  check_coarse(coarse, q);
+  if (n_added == 0) {
+    if (size != 0) fail(Status::bad_layer, std::string(kWhat) + ": payload present for zero added points");
+    return {};
+  }
+  BitReader in(data, size, kWhat);
+  const Decoder decoder(in, q, coarse, n_added);
+  in.expect_end();
+  if (decoder.keys.size() != n_added)
+    fail(Status::bad_layer, std::string(kWhat) + ": " + std::to_string(decoder.keys.size()) + " points, " +
+                                std::to_string(n_added) + " declared");
+  std::vector<GridPoint> points(decoder.keys.size());
+  for (std::size_t i = 0; i < points.size(); ++i) points[i] = morton_point(decoder.keys[i], q);
+  sort_canonical(points);
+  return points;
+}
+
+}  // namespace hmc::detail

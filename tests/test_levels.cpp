@@ -1,0 +1,194 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// The progressive stream: levels coarse to fine, independent sets removed
+// per level, prefixes that decode to coarser levels, truncation.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <set>
+
+#include "codec/format.hpp"
+#include "container/container.hpp"
+#include "delaunay/delaunay.hpp"
+#include "hmc/codec.hpp"
+#include "samples.hpp"
+
+using namespace hmc;
+using namespace hmc::detail;
+
+namespace {
+
+Encoded encode_levels(const Mesh& m, int levels, Optimizer o = Optimizer::best,
+                      BoundaryMode b = BoundaryMode::linear, Fidelity f = Fidelity::shape) {
+  EncodeOptions opt;
+  opt.levels = levels;
+  opt.optimizer = o;
+  opt.boundary_mode = b;
+  opt.fidelity = f;
+  auto e = encode(m, opt);
+  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  return std::move(e).value();
+}
+
+// Edges of a level's mesh, as pairs of point indices.
+std::set<std::pair<std::uint32_t, std::uint32_t>> edges_of(const DecodedLevel& l) {
+  std::set<std::pair<std::uint32_t, std::uint32_t>> e;
+  auto add = [&](std::uint32_t a, std::uint32_t b) { e.insert({std::min(a, b), std::max(a, b)}); };
+  for (const auto& t : l.triangles)
+    for (int k = 0; k < 3; ++k) add(t[k], t[(k + 1) % 3]);
+  for (const auto& t : l.tetrahedra)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) add(t[i], t[j]);
+  return e;
+}
+
+// Every level removes an independent set of the finer level's mesh: no
+// two points the finer level adds (that the coarser lacks) are adjacent.
+void check_independent(const Encoded& e) {
+  REQUIRE(e.levels.size() >= 2);
+  for (std::size_t i = 1; i < e.levels.size(); ++i) {
+    const auto& coarse = e.levels[i - 1].points;
+    const auto& fine = e.levels[i];
+    CHECK(std::includes(fine.points.begin(), fine.points.end(), coarse.begin(), coarse.end()));
+    std::vector<std::uint8_t> added(fine.points.size(), 0);
+    for (std::size_t v = 0; v < fine.points.size(); ++v)
+      added[v] = !std::binary_search(coarse.begin(), coarse.end(), fine.points[v]);
+    std::size_t adjacent = 0;
+    for (const auto& [a, b] : edges_of(fine)) adjacent += added[a] && added[b];
+    CAPTURE(fine.lod);
+    CHECK(adjacent == 0);
+    CHECK(std::count(added.begin(), added.end(), 1) > 0);
+  }
+}
+
+
+}  // namespace
+
+TEST_CASE("every level removes an independent set, for every input, mode and optimiser") {
+  const Mesh sphere = samples::uv_sphere(18, 36), torus = samples::torus(48, 20), ball = samples::random_ball(700, 5);
+  for (BoundaryMode b : {BoundaryMode::constant, BoundaryMode::linear, BoundaryMode::adaptive}) {
+    CAPTURE(boundary_mode_name(b));
+    check_independent(encode_levels(sphere, 4, Optimizer::best, b));
+    check_independent(encode_levels(torus, 4, Optimizer::best, b));
+  }
+  // A volume mesh given as input: a lattice block's Delaunay tetrahedra.
+  Mesh vol = samples::lattice(7, 6, 5);
+  {
+    std::vector<GridPoint> g;
+    for (const auto& p : vol.points) g.push_back({std::uint32_t(p[0]), std::uint32_t(p[1]), std::uint32_t(p[2])});
+    const auto dt = delaunay(g);  // lattice order is canonical order
+    vol.tetrahedra = dt.tets;
+  }
+  for (Optimizer o : {Optimizer::forward, Optimizer::backward, Optimizer::greedy, Optimizer::best}) {
+    CAPTURE(optimizer_name(o));
+    const auto e = encode_levels(vol, 3, o);
+    CHECK(e.report.kind == Kind::volume);
+    check_independent(e);
+  }
+  for (Optimizer o : {Optimizer::forward, Optimizer::backward, Optimizer::greedy, Optimizer::best}) {
+    CAPTURE(optimizer_name(o));
+    check_independent(encode_levels(ball, 4, o));  // points kind: decimated as the volume of their tetrahedra
+  }
+}
+
+TEST_CASE("decoded levels equal the encoder's, coarsest first, each a subset of the next") {
+  const auto e = encode_levels(samples::torus(40, 16), 4);
+  REQUIRE(e.levels.size() == 4);
+  auto d = decode(e.bytes.data(), e.bytes.size());
+  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  REQUIRE(d.value().levels.size() == 4);
+  for (std::size_t i = 0; i < 4; ++i) {
+    CAPTURE(i);
+    const auto& a = e.levels[i];
+    const auto& b = d.value().levels[i];
+    CHECK(a.lod == b.lod);
+    CHECK(b.lod == 3 - static_cast<int>(i));
+    CHECK(a.points == b.points);
+    CHECK(a.triangles == b.triangles);
+    CHECK(a.stream_bytes == b.stream_bytes);
+  }
+  CHECK(d.value().finest().points == e.points);
+  CHECK(e.report.levels.size() == 4);
+  CHECK(e.report.levels.back().points == e.points.size());
+}
+
+TEST_CASE("every prefix ending on a level boundary decodes to that level; cuts elsewhere to the last complete one") {
+  const auto e = encode_levels(samples::uv_sphere(14, 28), 3);
+  REQUIRE(e.levels.size() == 3);
+  const auto& b = e.bytes;
+  for (std::size_t i = 0; i < e.levels.size(); ++i) {
+    const auto& lvl = e.levels[i];
+    auto d = decode(b.data(), lvl.stream_bytes);
+    REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+    CHECK(d.value().finest().lod == lvl.lod);
+    CHECK(d.value().finest().points == lvl.points);
+    CHECK(d.value().finest().triangles == lvl.triangles);
+    CHECK(d.value().truncated == (lvl.lod > 0));
+  }
+  // Cut anywhere: the finest complete level before the cut, or an error
+  // before the first level.
+  for (std::size_t n = 0; n < b.size(); n += 7) {
+    auto d = decode(b.data(), n);
+    std::size_t complete = 0;
+    for (const auto& l : e.levels) complete += l.stream_bytes <= n;
+    CAPTURE(n);
+    if (complete == 0) {
+      CHECK(d.status() == Status::truncated);
+    } else {
+      REQUIRE(d.ok());
+      CHECK(d.value().levels.size() == complete);
+      CHECK_FALSE(d.value().warning.empty());
+    }
+  }
+}
+
+TEST_CASE("finest_level stops at a coarser level") {
+  const auto e = encode_levels(samples::torus(40, 16), 3);
+  DecodeOptions o;
+  o.finest_level = 1;
+  auto d = decode(e.bytes.data(), e.bytes.size(), o);
+  REQUIRE(d.ok());
+  CHECK(d.value().finest().lod == 1);
+  CHECK(d.value().levels.size() == 2);
+  CHECK_FALSE(d.value().truncated);
+}
+
+TEST_CASE("stream structure errors around refinement layers") {
+  const auto e = encode_levels(samples::uv_sphere(12, 24), 3);
+  auto v = parse_container(e.bytes.data(), e.bytes.size(), kEnd);
+  std::vector<std::pair<ChunkType, std::vector<std::uint8_t>>> chunks;
+  for (const auto& c : v.chunks) chunks.emplace_back(c.type, std::vector<std::uint8_t>(c.payload, c.payload + c.length));
+  auto build = [](const std::vector<std::pair<ChunkType, std::vector<std::uint8_t>>>& cs) {
+    ContainerWriter w;
+    for (const auto& [t, p] : cs) w.chunk(t, p);
+    return w.finish();
+  };
+  auto status = [&](const std::vector<std::pair<ChunkType, std::vector<std::uint8_t>>>& cs) {
+    const auto b = build(cs);
+    return decode(b.data(), b.size()).status();
+  };
+  REQUIRE(status(chunks) == Status::ok);
+  std::size_t refn = 0;
+  for (std::size_t i = 0; i < chunks.size(); ++i)
+    if (chunks[i].first == kRefinement) {
+      refn = i;
+      break;
+    }
+  REQUIRE(refn > 0);
+  auto c = chunks;
+  c.insert(c.end() - 1, c[refn]);  // an extra REFN beyond the declared levels
+  c.insert(c.end() - 1, c[refn + 1]);
+  CHECK(status(c) == Status::bad_chunk);
+  c = chunks;
+  c[refn].second[0] = 7;  // unknown refinement coder
+  CHECK(status(c) == Status::bad_layer);
+  c = chunks;
+  c[refn].second.push_back(0);  // trailing byte in the layer
+  CHECK(status(c) != Status::ok);
+  c = chunks;
+  // REFN before BASE
+  std::size_t base = 0;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    if (c[i].first == kBaseLayer) base = i;
+  std::swap(c[base], c[refn]);
+  CHECK(status(c) == Status::bad_chunk);
+}

@@ -1,0 +1,496 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Refinement layer: round trips over many splits of the sample sets, order
+// independence, an independent decoder written from the spec text, and
+// malformed streams.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <functional>
+#include <numeric>
+#include <random>
+#include <set>
+#include <tuple>
+
+#include "entropy/huffman.hpp"
+#include "hmc/codec.hpp"
+#include "pointset/octree.hpp"
+#include "pointset/refine.hpp"
+#include "samples.hpp"
+
+using namespace hmc;
+using namespace hmc::detail;
+
+namespace {
+
+using Points = std::vector<GridPoint>;
+
+Status status_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const StreamError& e) {
+    return e.error().status;
+  }
+  return Status::ok;
+}
+
+Points quantize(const Mesh& m, int q) {
+  EncodeOptions o;
+  o.bits = q;
+  o.kind = Kind::points;
+  o.write_info = false;
+  auto e = encode(m, o);
+  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  return e.value().points;
+}
+
+Points sorted(Points p) {
+  sort_canonical(p);
+  return p;
+}
+
+struct Split {
+  Points coarse, added;
+};
+
+// Puts each point in `added` when pick(i) holds; the coarse part is canonical.
+Split split_by(const Points& all, const std::function<bool(std::size_t)>& pick) {
+  Split s;
+  for (std::size_t i = 0; i < all.size(); ++i) (pick(i) ? s.added : s.coarse).push_back(all[i]);
+  sort_canonical(s.coarse);
+  return s;
+}
+
+Split split_random(const Points& all, double fraction, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::size_t> idx(all.size());
+  std::iota(idx.begin(), idx.end(), std::size_t{0});
+  std::shuffle(idx.begin(), idx.end(), rng);
+  auto n = static_cast<std::size_t>(fraction * static_cast<double>(all.size()));
+  n = std::min(std::max<std::size_t>(n, 1), all.size() - 1);
+  std::vector<char> added(all.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) added[idx[i]] = 1;
+  return split_by(all, [&](std::size_t i) { return added[i] != 0; });
+}
+
+// ---- An independent decoder, written from spec/refinement-layer.md. It
+// searches neighbours by brute force and keeps no state between nodes, so it
+// checks the library's neighbour search and its candidate hand-down.
+class ReferenceDecoder {
+ public:
+  ReferenceDecoder(const std::vector<std::uint8_t>& data, int q, const Points& coarse, std::uint64_t n)
+      : in_(data.data(), data.size(), "reference"), q_(q), coarse_(coarse), n_(n) {
+    for (unsigned v = 1; v < 256; ++v) e_.push_back(v);
+    std::stable_sort(e_.begin(), e_.end(), [](unsigned a, unsigned b) { return bits(a) < bits(b); });
+    K_ = static_cast<int>(in_.get(4));
+    L_ = static_cast<int>(in_.get(2)) + 1;
+    table_.assign(static_cast<std::size_t>(q * L_), -1);
+    for (int d = 0; d < q; ++d)
+      for (int k = 0; k < L_; ++k) {
+        const auto slot = static_cast<std::size_t>(d * L_ + k);
+        if (in_.get(1)) {
+          codes_.push_back(HuffmanCode::read(in_, 255, "reference table"));
+          table_[slot] = static_cast<int>(codes_.size()) - 1;
+        } else if (d > 0) {
+          table_[slot] = table_[slot - static_cast<std::size_t>(L_)];
+        }
+      }
+    visit(0, {0, 0, 0});
+    in_.expect_end();
+    if (points.size() != n_) fail(Status::bad_layer, "reference: point count");
+    sort_canonical(points);
+  }
+  Points points;
+
+ private:
+  static int bits(unsigned v) { return v ? static_cast<int>(v & 1u) + bits(v >> 1) : 0; }
+
+  static std::int64_t shrink(std::int64_t x, int s) { return x < 0 ? -((-x) >> s) : x >> s; }
+  template <class It>
+  static void reduce(It first, It last, int b) {
+    std::int64_t m = 0;
+    for (It i = first; i != last; ++i) m = std::max(m, *i < 0 ? -*i : *i);
+    int len = 0;
+    while (len < 63 && (m >> len) != 0) ++len;
+    const int s = std::max(0, len - b);
+    for (It i = first; i != last; ++i) *i = shrink(*i, s);
+  }
+
+  // The child of `node` (depth d) that holds p, or -1.
+  int child_of(const GridPoint& p, const std::array<std::int64_t, 3>& node, int d) const {
+    int c = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const std::int64_t at = std::int64_t{p[a]} >> (q_ - d - 1);
+      if ((at >> 1) != node[a]) return -1;
+      c = 2 * c + static_cast<int>(at & 1);
+    }
+    return c;
+  }
+
+  void visit(int d, const std::array<std::int64_t, 3>& node) {
+    unsigned m = 0;
+    for (const GridPoint& p : coarse_)
+      if (const int c = child_of(p, node, d); c >= 0) m |= 1u << c;
+    const int cls = std::min(bits(m), L_ - 1);
+    const int t = table_[static_cast<std::size_t>(d * L_ + cls)];
+    if (t < 0) fail(Status::bad_layer, "reference: no table");
+    const unsigned rho = e_[codes_[static_cast<std::size_t>(t)].decode(in_)];
+
+    // Neighbours: the k coarse points nearest to the node centre (doubled
+    // coordinates), ties by canonical index.
+    const std::int64_t h = std::int64_t{1} << (q_ - d);
+    std::array<std::int64_t, 3> o{};
+    for (std::size_t a = 0; a < 3; ++a) o[a] = 2 * node[a] * h + h;
+    std::vector<std::pair<std::int64_t, std::size_t>> by_distance;
+    for (std::size_t i = 0; i < coarse_.size(); ++i) {
+      std::int64_t d2 = 0;
+      for (std::size_t a = 0; a < 3; ++a) d2 += (2 * std::int64_t{coarse_[i][a]} - o[a]) * (2 * std::int64_t{coarse_[i][a]} - o[a]);
+      by_distance.emplace_back(d2, i);
+    }
+    const std::int64_t k = std::min<std::int64_t>(K_, static_cast<std::int64_t>(coarse_.size()));
+    std::partial_sort(by_distance.begin(), by_distance.begin() + k, by_distance.end());
+    std::array<std::int64_t, 3> S{};
+    std::int64_t sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
+    for (std::int64_t i = 0; i < k; ++i) {
+      const GridPoint& p = coarse_[by_distance[static_cast<std::size_t>(i)].second];
+      const std::int64_t x = 2 * std::int64_t{p[0]}, y = 2 * std::int64_t{p[1]}, z = 2 * std::int64_t{p[2]};
+      S[0] += x, S[1] += y, S[2] += z;
+      sxx += x * x, syy += y * y, szz += z * z, sxy += x * y, sxz += x * z, syz += y * z;
+    }
+    std::array<std::int64_t, 6> M{k * sxx - S[0] * S[0], k * syy - S[1] * S[1], k * szz - S[2] * S[2],
+                                  k * sxy - S[0] * S[1], k * sxz - S[0] * S[2], k * syz - S[1] * S[2]};
+    reduce(M.begin(), M.end(), 31);
+    const std::int64_t Mxx = M[0], Myy = M[1], Mzz = M[2], Mxy = M[3], Mxz = M[4], Myz = M[5];
+    const std::int64_t Axx = Myy * Mzz - Myz * Myz, Ayy = Mxx * Mzz - Mxz * Mxz, Azz = Mxx * Myy - Mxy * Mxy;
+    const std::int64_t Axy = Mxz * Myz - Mxy * Mzz, Axz = Mxy * Myz - Mxz * Myy, Ayz = Mxy * Mxz - Mxx * Myz;
+    std::array<std::int64_t, 3> n{Axx, Axy, Axz};
+    if (Ayy > Axx && Ayy >= Azz) n = {Axy, Ayy, Ayz};
+    else if (Azz > Axx && Azz > Ayy) n = {Axz, Ayz, Azz};
+    reduce(n.begin(), n.end(), 20);
+
+    struct Key {
+      int coarse_free;
+      std::int64_t t, e;
+      int c;
+      bool operator<(const Key& o) const {
+        return std::tie(coarse_free, t, e, c) < std::tie(o.coarse_free, o.t, o.e, o.c);
+      }
+    };
+    std::vector<Key> rank;
+    for (int c = 0; c < 8; ++c) {
+      std::int64_t dot = 0, len = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        const std::int64_t u = (2 * node[a] + ((c >> (2 - static_cast<int>(a))) & 1)) * h + h / 2;
+        const std::int64_t v = k * u - S[a];
+        dot += n[a] * v;
+        len += v * v;
+      }
+      rank.push_back({(m >> c) & 1u ? 0 : 1, dot < 0 ? -dot : dot, len, c});
+    }
+    std::sort(rank.begin(), rank.end());
+    unsigned occ = 0;
+    for (int r = 0; r < 8; ++r)
+      if ((rho >> r) & 1u) occ |= 1u << rank[static_cast<std::size_t>(r)].c;
+
+    for (int c = 0; c < 8; ++c) {
+      if (!((occ >> c) & 1u)) continue;
+      std::array<std::int64_t, 3> child{};
+      for (std::size_t a = 0; a < 3; ++a) child[a] = 2 * node[a] + ((c >> (2 - static_cast<int>(a))) & 1);
+      if (d + 1 < q_) {
+        visit(d + 1, child);
+        continue;
+      }
+      if ((m >> c) & 1u) fail(Status::bad_layer, "reference: added point is a coarse point");
+      if (points.size() == n_) fail(Status::bad_layer, "reference: too many points");
+      points.push_back({static_cast<std::uint32_t>(child[0]), static_cast<std::uint32_t>(child[1]),
+                        static_cast<std::uint32_t>(child[2])});
+    }
+  }
+
+  BitReader in_;
+  int q_;
+  const Points& coarse_;
+  std::uint64_t n_;
+  int K_ = 0, L_ = 1;
+  std::vector<unsigned> e_;
+  std::vector<HuffmanCode> codes_;
+  std::vector<int> table_;
+};
+
+// Encodes, decodes with the library and (for small sets) with the reference
+// decoder; returns the stream.
+std::vector<std::uint8_t> round_trip(const Points& coarse, const Points& added, int q,
+                                     const RefinementParams* params = nullptr) {
+  const auto bytes = params ? encode_refinement(coarse, added, q, *params) : encode_refinement(coarse, added, q);
+  const Points back = decode_refinement(bytes.data(), bytes.size(), q, coarse, added.size());
+  CHECK(back == sorted(added));
+  if (coarse.size() * added.size() <= 2'000'000) {
+    ReferenceDecoder ref(bytes, q, coarse, added.size());
+    CHECK(ref.points == back);
+  }
+  return bytes;
+}
+
+// A decoded (possibly corrupted) layer must still be a valid set of added points.
+void check_valid_output(const Points& out, std::uint64_t n, const Points& coarse, int q) {
+  REQUIRE(out.size() == n);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    CHECK(((out[i][0] | out[i][1] | out[i][2]) >> q) == 0u);
+    if (i) CHECK(out[i - 1] < out[i]);
+    CHECK_FALSE(std::binary_search(coarse.begin(), coarse.end(), out[i]));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("refinement round trips on random splits of the sample sets") {
+  const int q = 12;
+  const std::vector<std::pair<const char*, Points>> sets{
+      {"torus", quantize(samples::torus(40, 24), q)},
+      {"sphere", quantize(samples::uv_sphere(30, 40), q)},
+      {"ball", quantize(samples::random_ball(3000, 7), q)},
+      {"lattice", quantize(samples::lattice(12, 10, 8), q)},
+      {"clustered", quantize(samples::clustered(6, 400, 3), q)},
+      {"coplanar", quantize(samples::coplanar(1500, 5), q)},
+  };
+  for (const auto& set : sets)
+    for (double fraction : {0.1, 0.3, 0.5, 0.9}) {
+      const char* name = set.first;
+      CAPTURE(name);
+      CAPTURE(fraction);
+      const Split s = split_random(set.second, fraction, 11);
+      round_trip(s.coarse, s.added, q);
+    }
+}
+
+TEST_CASE("refinement round trips on structured splits") {
+  const int q = 12;
+  const Points pts = quantize(samples::uv_sphere(40, 50), q);
+  const std::uint32_t mid = pts[pts.size() / 2][0];
+  SUBCASE("added far from coarse") {
+    const Split s = split_by(pts, [&](std::size_t i) { return pts[i][0] > mid; });
+    round_trip(s.coarse, s.added, q);
+  }
+  SUBCASE("added interleaved with coarse") {
+    const Split s = split_by(pts, [](std::size_t i) { return i % 2 == 1; });
+    round_trip(s.coarse, s.added, q);
+  }
+  SUBCASE("a single added point") {
+    for (std::size_t at : {std::size_t{0}, pts.size() / 3, pts.size() - 1}) {
+      const Split s = split_by(pts, [&](std::size_t i) { return i == at; });
+      round_trip(s.coarse, s.added, q);
+    }
+  }
+  SUBCASE("a single coarse point") {
+    const Split s = split_by(pts, [](std::size_t i) { return i != 5; });
+    round_trip(s.coarse, s.added, q);
+  }
+}
+
+TEST_CASE("refinement round trips with every header choice") {
+  const int q = 12;
+  const Points pts = quantize(samples::torus(24, 16), q);
+  const Split s = split_random(pts, 0.3, 4);
+  for (int k : {0, 1, 2, 3, 4, 7, 15})
+    for (int classes = 1; classes <= 4; ++classes) {
+      CAPTURE(k);
+      CAPTURE(classes);
+      const RefinementParams p{k, classes};
+      const auto bytes = round_trip(s.coarse, s.added, q, &p);
+      CHECK((bytes[0] >> 4) == k);
+      CHECK(((bytes[0] >> 2) & 3) + 1 == classes);
+    }
+}
+
+TEST_CASE("refinement on the 2x2x2 grid: every split") {
+  // q = 1: the root's children are the eight grid points.
+  Points all;
+  for (std::uint32_t i = 0; i < 8; ++i) all.push_back({i >> 2, (i >> 1) & 1u, i & 1u});
+  int cases = 0;
+  for (unsigned coarse_mask = 1; coarse_mask < 256; ++coarse_mask)
+    for (unsigned added_mask = 1; added_mask < 256; ++added_mask) {
+      if (coarse_mask & added_mask) continue;
+      Points coarse, added;
+      for (unsigned i = 0; i < 8; ++i) {
+        if ((coarse_mask >> i) & 1u) coarse.push_back(all[i]);
+        if ((added_mask >> i) & 1u) added.push_back(all[i]);
+      }
+      sort_canonical(coarse);
+      round_trip(coarse, added, 1);
+      ++cases;
+    }
+  CHECK(cases == 6050);  // 3^8 - 2 * 2^8 + 1 splits with both parts non-empty
+}
+
+TEST_CASE("refinement at q = 2 and q = 21") {
+  std::mt19937_64 rng(5);
+  SUBCASE("q = 2") {
+    for (int trial = 0; trial < 200; ++trial) {
+      Points coarse, added;
+      for (std::uint32_t i = 0; i < 64; ++i) {
+        const auto r = rng() % 3;
+        const GridPoint p{i >> 4, (i >> 2) & 3u, i & 3u};
+        if (r == 0) coarse.push_back(p);
+        else if (r == 1) added.push_back(p);
+      }
+      if (coarse.empty() || added.empty()) continue;
+      round_trip(coarse, added, 2);
+    }
+  }
+  SUBCASE("q = 21, points at the corners and spread over the grid") {
+    const std::uint32_t top = (1u << 21) - 1;
+    std::set<GridPoint> set{{0, 0, 0}, {top, top, top}, {top, 0, top}, {0, top, 0}, {1, 0, 0}, {top - 1, top, top}};
+    std::uniform_int_distribution<std::uint32_t> any(0, top);
+    while (set.size() < 600) set.insert({any(rng), any(rng), any(rng)});
+    const Points pts(set.begin(), set.end());
+    const Split s = split_random(pts, 0.4, 9);
+    round_trip(s.coarse, s.added, 21);
+    const Split corners = split_by(pts, [](std::size_t i) { return i % 3 == 0; });
+    round_trip(corners.coarse, corners.added, 21);
+    const RefinementParams p{15, 4};
+    round_trip(s.coarse, s.added, 21, &p);
+  }
+  SUBCASE("q = 21, a dense surface") {
+    const Points pts = quantize(samples::uv_sphere(30, 30), 21);
+    const Split s = split_random(pts, 0.3, 2);
+    round_trip(s.coarse, s.added, 21);
+  }
+}
+
+TEST_CASE("refinement streams do not depend on the order of the input") {
+  const Points pts = quantize(samples::torus(30, 20), 12);
+  const Split s = split_random(pts, 0.3, 3);
+  const auto bytes = encode_refinement(s.coarse, s.added, 12);
+  std::mt19937_64 rng(8);
+  for (int i = 0; i < 5; ++i) {
+    Points added = s.added, coarse = s.coarse;
+    std::shuffle(added.begin(), added.end(), rng);
+    std::shuffle(coarse.begin(), coarse.end(), rng);
+    CHECK(encode_refinement(s.coarse, added, 12) == bytes);
+    CHECK(encode_refinement(coarse, added, 12) == bytes);
+  }
+}
+
+TEST_CASE("refinement is cheaper than coding the added points alone") {
+  const Points pts = quantize(samples::uv_sphere(60, 80), 12);
+  const Split s = split_by(pts, [](std::size_t i) { return i % 3 == 0; });
+  const auto refined = encode_refinement(s.coarse, s.added, 12);
+  const auto alone = encode_octree(s.added, 12);
+  CHECK(refined.size() < alone.size());
+}
+
+TEST_CASE("refinement: an empty layer and invalid arguments") {
+  const Points coarse{{1, 2, 3}, {4, 5, 6}};
+  CHECK(encode_refinement(coarse, {}, 4).empty());
+  CHECK(decode_refinement(nullptr, 0, 4, coarse, 0).empty());
+  const std::uint8_t zero = 0;
+  CHECK(status_of([&] { decode_refinement(&zero, 1, 4, coarse, 0); }) == Status::bad_layer);
+  CHECK(status_of([&] { encode_refinement(coarse, {{1, 2, 3}}, 4); }) == Status::invalid_argument);
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}, {0, 0, 1}}, 4); }) == Status::invalid_argument);
+  CHECK(status_of([&] { encode_refinement({}, {{0, 0, 1}}, 4); }) == Status::invalid_argument);
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 16}}, 4); }) == Status::invalid_argument);
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 0); }) == Status::invalid_argument);
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 22); }) == Status::invalid_argument);
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 4, RefinementParams{16, 1}); }) ==
+        Status::invalid_argument);
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 4, RefinementParams{4, 5}); }) ==
+        Status::invalid_argument);
+  const std::uint8_t some[2] = {0x40, 0};
+  CHECK(status_of([&] { decode_refinement(some, 2, 4, {}, 1); }) == Status::invalid_argument);
+  CHECK(status_of([&] { decode_refinement(some, 2, 4, {{4, 5, 6}, {1, 2, 3}}, 1); }) == Status::invalid_argument);
+}
+
+TEST_CASE("refinement: hand-made streams") {
+  const int q = 4;
+  const Points coarse{{15, 15, 15}};  // last in Morton order
+  SUBCASE("no table for a slot that is used") {
+    BitWriter w;
+    w.put(0, 4);  // K = 0
+    w.put(0, 2);  // L = 1
+    for (int d = 0; d < q; ++d) w.put(0, 1);
+    const auto b = w.finish();
+    CHECK(status_of([&] { decode_refinement(b.data(), b.size(), q, coarse, 1); }) == Status::bad_layer);
+  }
+  // One-symbol tables that fill every node: the stream claims 8^4 points.
+  BitWriter w;
+  w.put(0, 4);
+  w.put(0, 2);
+  for (int d = 0; d < q; ++d) {
+    w.put(1, 1);    // a table follows
+    w.put(1, 1);    // one-symbol form
+    w.put(254, 8);  // the occupancy 255
+  }
+  const auto full = w.finish();
+  SUBCASE("more points than declared") {
+    CHECK(status_of([&] { decode_refinement(full.data(), full.size(), q, coarse, 100); }) == Status::bad_layer);
+  }
+  SUBCASE("an added point on a coarse point") {
+    CHECK(status_of([&] { decode_refinement(full.data(), full.size(), q, coarse, 4096); }) == Status::bad_layer);
+    const Points away{{0, 0, 0}};
+    CHECK(status_of([&] { decode_refinement(full.data(), full.size(), q, away, 4096); }) == Status::bad_layer);
+  }
+  SUBCASE("a single symbol outside the alphabet") {
+    BitWriter b;
+    b.put(0, 4);
+    b.put(0, 2);
+    b.put(1, 1);
+    b.put(1, 1);
+    b.put(255, 8);
+    for (int d = 1; d < q; ++d) b.put(0, 1);
+    const auto bytes = b.finish();
+    CHECK(status_of([&] { decode_refinement(bytes.data(), bytes.size(), q, coarse, 1); }) ==
+          Status::bad_huffman_table);
+  }
+}
+
+TEST_CASE("malformed refinement streams are rejected, never misread") {
+  const int q = 10;
+  const Points pts = quantize(samples::random_sphere_points(900, 4), q);
+  const Split s = split_random(pts, 0.3, 6);
+  const auto good = encode_refinement(s.coarse, s.added, q);
+  const std::uint64_t n = s.added.size();
+  REQUIRE(good.size() > 16);
+  const auto decode = [&](const std::vector<std::uint8_t>& b, std::uint64_t count) {
+    return decode_refinement(b.data(), b.size(), q, s.coarse, count);
+  };
+  const auto is_stream_error = [](Status st) { return st == Status::bad_layer || st == Status::bad_huffman_table; };
+
+  SUBCASE("truncated") {
+    for (std::size_t len = 0; len < good.size(); ++len) {
+      const std::vector<std::uint8_t> cut(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(len));
+      CAPTURE(len);
+      CHECK(is_stream_error(status_of([&] { decode(cut, n); })));
+    }
+  }
+  SUBCASE("extra bytes") {
+    for (int extra : {0x00, 0x80, 0xff}) {
+      auto longer = good;
+      longer.push_back(static_cast<std::uint8_t>(extra));
+      CHECK(status_of([&] { decode(longer, n); }) == Status::bad_layer);
+    }
+  }
+  SUBCASE("wrong point count") {
+    for (std::uint64_t wrong : {n - 1, n + 1, 2 * n, std::uint64_t{1} << 40})
+      CHECK(status_of([&] { decode(good, wrong); }) == Status::bad_layer);
+  }
+  SUBCASE("bit flips and garbage") {
+    std::mt19937_64 rng(12);
+    int errors = 0, decoded = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+      auto bad = good;
+      const int flips = trial < 250 ? 1 : 1 + static_cast<int>(rng() % 8);
+      for (int f = 0; f < flips; ++f) bad[rng() % bad.size()] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+      if (trial >= 350)  // a run of random bytes
+        for (std::size_t i = rng() % bad.size(), e = std::min(bad.size(), i + 1 + rng() % 16); i < e; ++i)
+          bad[i] = static_cast<std::uint8_t>(rng());
+      try {
+        check_valid_output(decode(bad, n), n, s.coarse, q);
+        ++decoded;
+      } catch (const StreamError& e) {
+        CHECK(is_stream_error(e.error().status));
+        ++errors;
+      }
+    }
+    CHECK(errors >= 100);  // equal-length codewords swapped keep the stream in sync: still a valid set
+    MESSAGE(errors << " rejected, " << decoded << " decoded to another valid set");
+  }
+}
