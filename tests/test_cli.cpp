@@ -192,3 +192,18 @@ TEST_CASE("quality reports the thesis' tests with stable JSON keys") {
   CHECK(r.out.find("\"tetrahedra\": 1") != std::string::npos);
   CHECK(hmc_run(dir, "quality " + q(dir + "/none.mesh")).code == 2);
 }
+
+TEST_CASE("quality of a stream is reported per decoded level") {
+  const auto dir = testgen::temp_dir("cli_quality_stream");
+  REQUIRE(io::write_mesh(dir + "/s.ply", samples::uv_sphere(12, 24)).ok());
+  REQUIRE(hmc_run(dir, "enc " + q(dir + "/s.ply") + " -o " + q(dir + "/s.hmc") + " --levels 2").code == 0);
+  auto r = hmc_run(dir, "quality " + q(dir + "/s.hmc") + " --json");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(r.out.find("\"level\": 1") != std::string::npos);
+  CHECK(r.out.find("\"level\": 0") != std::string::npos);
+  const auto at = r.out.find("\"tri_angle\": ");
+  REQUIRE(at != std::string::npos);
+  const double v = std::strtod(r.out.c_str() + at + 13, nullptr);
+  CHECK(v > 0.3);  // a UV sphere's triangles are far from degenerate
+  CHECK(v <= 1.0);
+}

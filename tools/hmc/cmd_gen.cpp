@@ -20,6 +20,7 @@ int cmd_gen(int argc, char** argv) {
                  "  torus    closed triangle surface of genus 1 on a 2:1 grid (default 36450 = 270 x 135)\n"
                  "  sphere   closed triangle surface (UV sphere)\n"
                  "  ball     random points inside a ball (no connectivity)\n"
+                 "  shells   a ball sampled on concentric shells (the thesis' 587-vertex sphere; points only)\n"
                  "  lattice  cubic lattice of points (many cospherical quadruples)\n",
                  a.ok() ? "need a sample name and -o OUT" : a.error().c_str());
     return kUsage;
@@ -35,11 +36,18 @@ int cmd_gen(int argc, char** argv) {
     m = samples::uv_sphere(rings, 2 * rings);
   } else if (what == "ball") {
     m = samples::random_ball(static_cast<std::size_t>(n), seed);
+  } else if (what == "shells") {
+    // The thesis' 587-vertex sphere (table 4.7: 247 boundary vertices, then
+    // layers of 171, 110, 53 and 6), scaled to about `n` vertices.
+    const double f = n / 587.0;
+    std::vector<int> counts;
+    for (int c : {247, 171, 110, 53, 6}) counts.push_back(std::max(1, static_cast<int>(std::lround(c * f))));
+    m = samples::layered_ball(counts);
   } else if (what == "lattice") {
     const int k = std::max(1, static_cast<int>(std::lround(std::cbrt(n))));
     m = samples::lattice(k, k, k);
   } else {
-    std::fprintf(stderr, "hmc gen: unknown sample '%s' (torus, sphere, ball, lattice)\n", what.c_str());
+    std::fprintf(stderr, "hmc gen: unknown sample '%s' (torus, sphere, ball, shells, lattice)\n", what.c_str());
     return kUsage;
   }
   io::WriteOptions wo;

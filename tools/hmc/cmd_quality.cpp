@@ -3,6 +3,7 @@
 #include <string>
 
 #include "cli.hpp"
+#include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
 #include "hmc/quality.hpp"
 
@@ -59,11 +60,42 @@ void quality_json(Json& j, const quality::MeshQuality& q) {
 int cmd_quality(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json"}, {});
   if (!a.ok() || a.positional().size() != 1) {
-    std::fprintf(stderr, "hmc quality: %s\nusage: hmc quality MESH [--json]\n",
+    std::fprintf(stderr, "hmc quality: %s\nusage: hmc quality MESH|STREAM.hmc [--json]\n",
                  a.ok() ? "need one mesh file" : a.error().c_str());
     return kUsage;
   }
   const std::string in = a.positional()[0];
+  if (in.size() > 4 && in.compare(in.size() - 4, 4, ".hmc") == 0) {
+    // A stream: every decoded level, after reconstruction.
+    auto bytes = io::read_file(in);
+    if (!bytes) return report("cannot read " + in, bytes.error(), Stage::input);
+    auto d = decode(reinterpret_cast<const std::uint8_t*>(bytes.value().data()), bytes.value().size());
+    if (!d) return report(in, d.error(), Stage::input);
+    Json j;
+    if (a.flag("--json")) j.begin_object().key("input").value(in).key("levels").begin_array();
+    for (const auto& l : d.value().levels) {
+      Mesh m;
+      for (const auto& p : l.points) m.points.push_back(d.value().quantizer.dequantize(p));
+      m.triangles = l.triangles;
+      m.tetrahedra = l.tetrahedra;
+      const auto q = quality::evaluate(m);
+      if (a.flag("--json")) {
+        j.begin_object().key("level").value(l.lod).key("points").value(static_cast<std::uint64_t>(m.points.size()));
+        quality_json(j, q);
+        j.end_object();
+      } else {
+        std::printf("%s level %d: %zu points, %zu triangles, %zu tetrahedra\n", in.c_str(), l.lod, m.points.size(),
+                    m.triangles.size(), m.tetrahedra.size());
+        print_quality(q);
+        std::printf("\n");
+      }
+    }
+    if (a.flag("--json")) {
+      j.end_array().end_object();
+      std::fputs(j.str().c_str(), stdout);
+    }
+    return kOk;
+  }
   auto mesh = io::read_mesh(in);
   if (!mesh) return report("cannot read " + in, mesh.error(), Stage::input);
   const auto q = quality::evaluate(mesh.value());

@@ -63,6 +63,25 @@ Mesh random_ball(std::size_t n, std::uint64_t seed, double radius) {
   return m;
 }
 
+Mesh layered_ball(const std::vector<int>& counts) {
+  Mesh m;
+  const double golden = kPi * (3.0 - std::sqrt(5.0));
+  const auto shells = static_cast<double>(counts.size());
+  for (std::size_t s = 0; s < counts.size(); ++s) {
+    const double r = (shells - static_cast<double>(s)) / shells;
+    const int n = counts[s];
+    if (n == 1) {
+      m.points.push_back({0, 0, 0});
+      continue;
+    }
+    for (int i = 0; i < n; ++i) {
+      const double z = 1 - 2 * (i + 0.5) / n, rho = std::sqrt(1 - z * z), phi = golden * i + 0.7 * static_cast<double>(s);
+      m.points.push_back({r * rho * std::cos(phi), r * rho * std::sin(phi), r * z});
+    }
+  }
+  return m;
+}
+
 Mesh random_sphere_points(std::size_t n, std::uint64_t seed, double radius) {
   Rng rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);

@@ -21,6 +21,11 @@ Mesh uv_sphere(int rings, int segments, double radius = 1.0);
 Mesh torus(int nu, int nv, double major = 1.0, double minor = 0.35);
 /// Points uniformly distributed inside a ball (no connectivity).
 Mesh random_ball(std::size_t n, std::uint64_t seed, double radius = 1.0);
+/// A ball sampled on concentric shells, outermost first: counts[0] points
+/// on the unit sphere, counts[1] on the sphere of radius (n-1)/n, ... (n =
+/// number of shells); a shell of one point is the centre. Fibonacci
+/// spirals, so the sampling is even and deterministic. No connectivity.
+Mesh layered_ball(const std::vector<int>& counts);
 /// Points uniformly distributed on a sphere surface (no connectivity).
 Mesh random_sphere_points(std::size_t n, std::uint64_t seed, double radius = 1.0);
 /// Integer lattice nx*ny*nz with spacing `h` (many cospherical points).
