@@ -185,6 +185,8 @@ int main(int argc, char** argv) {
               kind_name(kind), fidelity == Fidelity::rule ? "rule" : fidelity == Fidelity::exact ? "exact" : "shape",
               pts.size(), dt.tets.size());
   const std::size_t rcon_bytes = write_recon(params).size() + kChunkOverhead;
+  std::printf("\"filters\": [%u, %u, %u, %u, %u, %u], ", params.filters[0], params.filters[1], params.filters[2],
+              params.filters[3], params.filters[4], params.filters[5]);
   std::printf("\"classes\": %zu, \"scale_rank\": %u, \"peel\": %s, \"toggles\": %zu, \"mismatches\": %llu, "
               "\"rcon_bytes\": %zu, \"rcon_bits_per_point\": %.3f, ",
               params.multipliers.size(), params.scale_rank, params.peel ? "true" : "false", params.toggles.size(),

@@ -350,3 +350,57 @@ TEST_CASE("a stream cut between the layer and its RCON has no complete level") {
   auto d = decode(e.bytes.data(), recon_at);
   CHECK(d.status() == Status::truncated);
 }
+
+TEST_CASE("filters only remove candidate faces, and their RCON syntax is checked") {
+  const Mesh m = samples::uv_sphere(14, 28);
+  const auto e = encode(m).value();
+  const auto& pts = e.points;
+  const auto dt = delaunay(pts);
+  const auto scale = local_scale(pts, dt, 6);
+  ReconParams base;
+  base.peel = false;
+  const auto without = rule_labels(pts, dt, scale, base);
+  for (int f = 0; f < kFilterCount; ++f) {
+    CAPTURE(f);
+    for (std::uint32_t t : {1u, 16u, 256u, 4096u}) {
+      ReconParams p = base;
+      p.filters[static_cast<std::size_t>(f)] = f == kLone ? 1 : t;
+      const auto with = rule_labels(pts, dt, scale, p);
+      // Fewer candidate faces: the flood reaches at least as far.
+      for (std::size_t i = 0; i < with.size(); ++i) CHECK((with[i] <= without[i]) == true);
+      // Syntax round trip.
+      const auto bytes = write_recon(p);
+      ChunkView c;
+      c.type = kRecon;
+      c.payload = bytes.data();
+      c.length = static_cast<std::uint32_t>(bytes.size());
+      CHECK(read_recon(c, pts.size()).filters == p.filters);
+    }
+  }
+  // Reserved mask bits, zero or oversized thresholds, lone filter other than 1.
+  auto status_of = [&](const std::vector<std::uint8_t>& payload) {
+    ChunkView c;
+    c.type = kRecon;
+    c.payload = payload.data();
+    c.length = static_cast<std::uint32_t>(payload.size());
+    try {
+      read_recon(c, pts.size());
+    } catch (const StreamError& err) {
+      return err.error().status;
+    }
+    return Status::ok;
+  };
+  auto payload = [](std::uint8_t mask, std::vector<std::uint64_t> th) {
+    ByteWriter w;
+    w.u8(1), w.u8(6), w.u8(mask);
+    for (auto t : th) w.varint(t);
+    w.varint(1), w.varint(512), w.varint(0), w.varint(0), w.varint(0);
+    return w.data();
+  };
+  CHECK(status_of(payload(0, {})) == Status::ok);
+  CHECK(status_of(payload(1, {300})) == Status::ok);
+  CHECK(status_of(payload(0x40, {1})) == Status::bad_layer);
+  CHECK(status_of(payload(1, {0})) == Status::bad_layer);
+  CHECK(status_of(payload(1, {65536})) == Status::bad_layer);
+  CHECK(status_of(payload(8, {2})) == Status::bad_layer);
+}

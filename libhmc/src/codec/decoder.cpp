@@ -4,6 +4,7 @@
 #include <string>
 
 #include "codec/format.hpp"
+#include "codec/stream_decoder.hpp"
 #include "delaunay/delaunay.hpp"
 #include "reconstruct/reconstruct.hpp"
 #include "pointset/octree.hpp"
@@ -121,72 +122,96 @@ std::string truncation_warning(const ContainerView& view, const ChunkWalker& wal
          std::to_string(walk.header->points.size()) + " levels";
 }
 
-Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOptions& options) {
-  check_size(size, options.limits);
-  const ContainerView view = parse_container(data, size, kEnd);
+}  // namespace
+
+// The per-chunk decoding state, shared with the streaming decoder
+// (codec/stream_decoder.hpp).
+struct ChunkDecoder::State {
+  explicit State(const DecodeOptions& o) : options(o), walk(options.limits) {}
+  DecodeOptions options;
+  ChunkWalker walk;
   Decoded out;
-  out.version_major = view.major;
-  out.version_minor = view.minor;
-  ChunkWalker walk(options.limits);
   std::optional<DecodedLevel> pending;  // a level whose points are decoded, waiting for its RCON
   std::vector<GridPoint> previous_points;  // the last decoded level's points
-  for (const ChunkView& c : view.chunks) {
-    switch (walk.classify(c)) {
-      case ChunkWalker::Action::header:
-        out.kind = walk.header->kind;
-        out.declared_points = walk.header->points;
-        break;
-      case ChunkWalker::Action::quantizer: out.quantizer = *walk.quantizer; break;
-      case ChunkWalker::Action::vector_quantizer: out.vector_quantizer = read_vector_quantizer(c); break;
-      case ChunkWalker::Action::info: out.info = parse_info(c); break;
-      case ChunkWalker::Action::layer: {
-        // Layers after the requested level are checked for order only.
-        if (!out.levels.empty() && out.levels.back().lod <= options.finest_level) break;
-        const std::size_t k = walk.layers - 1;  // position in stream order
-        const auto& counts = walk.header->points;
-        if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
-        DecodedLevel level;
-        level.lod = static_cast<int>(counts.size() - 1 - k);
-        if (k == 0) {
-          if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
-            fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
-          level.points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, counts.front());
-        } else {
-          if (c.payload[0] != static_cast<std::uint8_t>(RefineCoder::conditional_octree))
-            fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
-          const auto& coarse = previous_points;
-          const auto added =
-              decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, counts[k] - counts[k - 1]);
-          level.points.resize(coarse.size() + added.size());
-          std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), level.points.begin());
-        }
-        level.stream_bytes = c.offset + kChunkOverhead + c.length;
-        previous_points = level.points;
-        if (walk.needs_recon()) {
-          pending = std::move(level);
-        } else {
-          out.levels.push_back(std::move(level));
-        }
-        break;
+};
+
+ChunkDecoder::ChunkDecoder(const DecodeOptions& options) : s_(std::make_unique<State>(options)) {}
+ChunkDecoder::~ChunkDecoder() = default;
+
+void ChunkDecoder::set_version(std::uint8_t major, std::uint8_t minor) {
+  s_->out.version_major = major;
+  s_->out.version_minor = minor;
+}
+
+bool ChunkDecoder::chunk(const ChunkView& c) {
+  const DecodeOptions& options = s_->options;
+  ChunkWalker& walk = s_->walk;
+  Decoded& out = s_->out;
+  std::optional<DecodedLevel>& pending = s_->pending;
+  std::vector<GridPoint>& previous_points = s_->previous_points;
+  const std::size_t levels_before = out.levels.size();
+  switch (walk.classify(c)) {
+    case ChunkWalker::Action::header:
+      out.kind = walk.header->kind;
+      out.declared_points = walk.header->points;
+      break;
+    case ChunkWalker::Action::quantizer: out.quantizer = *walk.quantizer; break;
+    case ChunkWalker::Action::vector_quantizer: out.vector_quantizer = read_vector_quantizer(c); break;
+    case ChunkWalker::Action::info: out.info = parse_info(c); break;
+    case ChunkWalker::Action::layer: {
+      // Layers after the requested level are checked for order only.
+      if (!out.levels.empty() && out.levels.back().lod <= options.finest_level) break;
+      const std::size_t k = walk.layers - 1;  // position in stream order
+      const auto& counts = walk.header->points;
+      if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
+      DecodedLevel level;
+      level.lod = static_cast<int>(counts.size() - 1 - k);
+      if (k == 0) {
+        if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
+          fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
+        level.points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, counts.front());
+      } else {
+        if (c.payload[0] != static_cast<std::uint8_t>(RefineCoder::conditional_octree))
+          fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
+        const auto& coarse = previous_points;
+        const auto added =
+            decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, counts[k] - counts[k - 1]);
+        level.points.resize(coarse.size() + added.size());
+        std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), level.points.begin());
       }
-      case ChunkWalker::Action::recon: {
-        if (!pending) break;  // a level after the requested one
-        const ReconParams params = read_recon(c, pending->points.size());
-        if (options.reconstruct) {
-          const auto dt = delaunay(pending->points);
-          auto rec = reconstruct(pending->points, dt, walk.header->kind, params);
-          pending->triangles = std::move(rec.triangles);
-          pending->tetrahedra = std::move(rec.tetrahedra);
-        }
-        pending->stream_bytes = c.offset + kChunkOverhead + c.length;
-        out.levels.push_back(std::move(*pending));
-        pending.reset();
-        break;
+      level.stream_bytes = c.offset + kChunkOverhead + c.length;
+      previous_points = level.points;
+      if (walk.needs_recon()) {
+        pending = std::move(level);
+      } else {
+        out.levels.push_back(std::move(level));
       }
-      case ChunkWalker::Action::skip:
-      case ChunkWalker::Action::end: break;
+      break;
     }
+    case ChunkWalker::Action::recon: {
+      if (!pending) break;  // a level after the requested one
+      const ReconParams params = read_recon(c, pending->points.size());
+      if (options.reconstruct) {
+        const auto dt = delaunay(pending->points);
+        auto rec = reconstruct(pending->points, dt, walk.header->kind, params);
+        pending->triangles = std::move(rec.triangles);
+        pending->tetrahedra = std::move(rec.tetrahedra);
+      }
+      pending->stream_bytes = c.offset + kChunkOverhead + c.length;
+      out.levels.push_back(std::move(*pending));
+      pending.reset();
+      break;
+    }
+    case ChunkWalker::Action::skip:
+    case ChunkWalker::Action::end: break;
   }
+  return out.levels.size() > levels_before;
+}
+
+void ChunkDecoder::finish(const ContainerView& view) {
+  const DecodeOptions& options = s_->options;
+  const ChunkWalker& walk = s_->walk;
+  Decoded& out = s_->out;
   if (!walk.end_seen) {
     if (out.levels.empty())
       fail(Status::truncated, view.truncated ? view.truncation + "; no complete level"
@@ -196,7 +221,23 @@ Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOpti
     out.warning = truncation_warning(view, walk);
     out.truncated = out.levels.back().lod > options.finest_level;
   }
-  return out;
+}
+
+const Decoded& ChunkDecoder::result() const { return s_->out; }
+Decoded ChunkDecoder::take() { return std::move(s_->out); }
+bool ChunkDecoder::header_ready() const { return s_->walk.header && s_->walk.quantizer; }
+bool ChunkDecoder::ended() const { return s_->walk.end_seen; }
+
+namespace {
+
+Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOptions& options) {
+  check_size(size, options.limits);
+  const ContainerView view = parse_container(data, size, kEnd);
+  ChunkDecoder decoder(options);
+  decoder.set_version(view.major, view.minor);
+  for (const ChunkView& c : view.chunks) decoder.chunk(c);
+  decoder.finish(view);
+  return decoder.take();
 }
 
 StreamInfo inspect_impl(const std::uint8_t* data, std::size_t size, const DecodeLimits& limits) {

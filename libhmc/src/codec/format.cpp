@@ -156,6 +156,12 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   ByteWriter w;
   w.u8(p.peel ? 1 : 0);
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
+  std::uint8_t mask = 0;
+  for (int i = 0; i < kFilterCount; ++i)
+    if (p.filters[static_cast<std::size_t>(i)]) mask = static_cast<std::uint8_t>(mask | (1u << i));
+  w.u8(mask);
+  for (int i = 0; i < kFilterCount; ++i)
+    if (p.filters[static_cast<std::size_t>(i)]) w.varint(p.filters[static_cast<std::size_t>(i)]);
   w.varint(p.multipliers.size());
   for (std::uint32_t m : p.multipliers) w.varint(m);
   if (p.multipliers.size() > 1) {
@@ -183,6 +189,15 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");
+  const std::uint8_t mask = r.u8();
+  if (mask >> kFilterCount) fail(Status::bad_layer, "RCON: reserved filter bits are set");
+  for (int i = 0; i < kFilterCount; ++i) {
+    if (!(mask & (1u << i))) continue;
+    const std::uint64_t t = r.varint();
+    if (t < 1 || t > 65535 || (i == kLone && t != 1))
+      fail(Status::bad_layer, "RCON: filter " + std::to_string(i) + " threshold " + std::to_string(t) + " is out of range");
+    p.filters[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(t);
+  }
   const std::uint64_t k = r.varint();
   if (k < 1 || k > kMaxClasses) fail(Status::bad_layer, "RCON: class count " + std::to_string(k) + " is outside 1..64");
   p.multipliers.clear();

@@ -45,6 +45,168 @@ bool candidate(const std::vector<GridPoint>& pts, const std::vector<std::uint64_
   return true;
 }
 
+__extension__ typedef unsigned __int128 U128;
+
+// Exact parts of a triangle: squared edge lengths e[i] (edge opposite
+// vertex i), N = e0·e1·e2 and D = |(q − p) × (r − p)|² (= 16·area²/4), so
+// that R² = N / (4D).
+struct TriangleParts {
+  std::uint64_t e[3];
+  U256 n;
+  U128 d;
+};
+
+TriangleParts parts_of(const std::vector<GridPoint>& pts, const std::array<std::uint32_t, 3>& f) {
+  TriangleParts t;
+  const GridPoint &p = pts[f[0]], &q = pts[f[1]], &r = pts[f[2]];
+  t.e[0] = dist2(q, r);
+  t.e[1] = dist2(r, p);
+  t.e[2] = dist2(p, q);
+  t.n = U256::from(t.e[0]).mul(t.e[1]).mul(t.e[2]);
+  std::int64_t u[3], v[3];
+  for (int i = 0; i < 3; ++i) {
+    u[i] = static_cast<std::int64_t>(q[i]) - p[i];
+    v[i] = static_cast<std::int64_t>(r[i]) - p[i];
+  }
+  t.d = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::int64_t c = u[(i + 1) % 3] * v[(i + 2) % 3] - u[(i + 2) % 3] * v[(i + 1) % 3];
+    const auto m = static_cast<U128>(c < 0 ? -c : c);
+    t.d += m * m;
+  }
+  return t;
+}
+
+std::uint64_t hi(U128 x) { return static_cast<std::uint64_t>(x >> 64); }
+std::uint64_t lo(U128 x) { return static_cast<std::uint64_t>(x); }
+
+// The candidate filters of spec 11.2a, applied to the faces that passed
+// the edge test. `cand` is indexed by 4·tet + local face and is updated on
+// both sides of every face.
+void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& dt,
+                   const std::vector<std::uint64_t>& scale, const ReconParams& p, std::vector<std::uint8_t>& cand) {
+  const auto& th = p.filters;
+  const std::size_t nt = dt.tets.size();
+  // Unique faces: sort (sorted triple, slot) and give each face an id.
+  struct Slot {
+    std::array<std::uint32_t, 3> key;
+    std::uint32_t slot;
+  };
+  std::vector<Slot> slots;
+  slots.reserve(nt * 4);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const std::size_t s = t * 4 + static_cast<std::size_t>(k);
+      if (!cand[s]) continue;
+      auto f = face_of(dt, t, k);
+      std::sort(f.begin(), f.end());
+      slots.push_back({f, static_cast<std::uint32_t>(s)});
+    }
+  std::sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
+    return a.key != b.key ? a.key < b.key : a.slot < b.slot;
+  });
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  std::vector<std::uint32_t> face_of_slot(slots.size());
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (i == 0 || slots[i].key != slots[i - 1].key) faces.push_back(slots[i].key);
+    face_of_slot[i] = static_cast<std::uint32_t>(faces.size() - 1);
+  }
+  const std::size_t nf = faces.size();
+  std::vector<TriangleParts> tp(nf);
+  std::vector<std::uint8_t> keep(nf, 1);
+  for (std::size_t i = 0; i < nf; ++i) {
+    const auto& f = faces[i];
+    tp[i] = parts_of(pts, f);
+    const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
+    const TriangleParts& t = tp[i];
+    const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
+    // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
+    if (th[kCircleRadius] && compare(t.n.mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
+      keep[i] = 0;
+    // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
+    if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
+    // (c) density: 256·D <= T·s² (a face much larger than the local spacing squared).
+    if (th[kDensity] && compare(U256::from(256).mul(hi(t.d), lo(t.d)), U256::from(smin).mul(smin).mul(th[kDensity])) > 0)
+      keep[i] = 0;
+  }
+  // Edge adjacency among the faces kept so far, for the neighbour filters.
+  const bool neighbours = th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio];
+  if (neighbours) {
+    struct EdgeRef {
+      std::uint64_t edge;
+      std::uint32_t face;
+    };
+    std::vector<EdgeRef> refs;
+    for (std::uint32_t i = 0; i < nf; ++i) {
+      if (!keep[i]) continue;
+      const auto& f = faces[i];
+      for (int a = 0; a < 3; ++a)
+        for (int b = a + 1; b < 3; ++b) refs.push_back({(std::uint64_t{f[a]} << 32) | f[b], i});
+    }
+    std::sort(refs.begin(), refs.end(), [](const EdgeRef& x, const EdgeRef& y) {
+      return x.edge != y.edge ? x.edge < y.edge : x.face < y.face;
+    });
+    // For each face: does it have a neighbour, the largest neighbour R² and
+    // the largest neighbour edge ratio (as fractions compared exactly).
+    std::vector<std::uint8_t> has(nf, 0);
+    std::vector<std::uint32_t> max_r(nf, ~0u), max_ratio(nf, ~0u);
+    auto r_less = [&](std::uint32_t a, std::uint32_t b) {  // R²(a) < R²(b)
+      const bool ia = tp[a].d == 0, ib = tp[b].d == 0;
+      if (ia || ib) return !ia && ib;
+      return compare(tp[a].n.mul(hi(tp[b].d), lo(tp[b].d)), tp[b].n.mul(hi(tp[a].d), lo(tp[a].d))) < 0;
+    };
+    auto ratio_less = [&](std::uint32_t a, std::uint32_t b) {  // Lmin²/Lmax² of a < of b
+      const auto& x = tp[a].e;
+      const auto& y = tp[b].e;
+      const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
+      const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
+      return xn * yd < yn * xd;
+    };
+    for (std::size_t i = 0; i < refs.size();) {
+      std::size_t j = i;
+      while (j < refs.size() && refs[j].edge == refs[i].edge) ++j;
+      for (std::size_t a = i; a < j; ++a)
+        for (std::size_t b = i; b < j; ++b) {
+          if (a == b) continue;
+          const std::uint32_t f = refs[a].face, g = refs[b].face;
+          has[f] = 1;
+          if (max_r[f] == ~0u || r_less(max_r[f], g)) max_r[f] = g;
+          if (max_ratio[f] == ~0u || ratio_less(max_ratio[f], g)) max_ratio[f] = g;
+        }
+      i = j;
+    }
+    std::vector<std::uint8_t> next = keep;
+    for (std::uint32_t f = 0; f < nf; ++f) {
+      if (!keep[f]) continue;
+      // (d) lone triangle: no edge shared with another kept face.
+      if (th[kLone] && !has[f]) next[f] = 0;
+      if (!has[f]) continue;
+      // (e) neighbour circle radius ratio: 256·R²(f) <= T·R²(g), g the
+      // neighbour of largest circumradius: 256·N_f·D_g <= T·N_g·D_f.
+      const std::uint32_t g = max_r[f];
+      // A collinear neighbour (D_g = 0) has an infinite circumradius: keep.
+      if (th[kNeighbourRadius] && tp[g].d != 0 &&
+          (tp[f].d == 0 || compare(tp[f].n.mul(hi(tp[g].d), lo(tp[g].d)).mul(256),
+                                   tp[g].n.mul(hi(tp[f].d), lo(tp[f].d)).mul(th[kNeighbourRadius])) > 0))
+        next[f] = 0;
+      // (f) neighbour min/max edge ratio: 256·r(f) >= T·r(h), h the
+      // neighbour with the largest ratio r = Lmin²/Lmax².
+      const std::uint32_t h = max_ratio[f];
+      if (th[kNeighbourRatio]) {
+        const auto& x = tp[f].e;
+        const auto& y = tp[h].e;
+        const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
+        const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
+        if (compare(U256::from(256).mul(hi(xn * yd), lo(xn * yd)), U256::from(th[kNeighbourRatio]).mul(hi(yn * xd), lo(yn * xd))) < 0)
+          next[f] = 0;
+      }
+    }
+    keep.swap(next);
+  }
+  for (std::size_t i = 0; i < slots.size(); ++i)
+    if (!keep[face_of_slot[i]]) cand[slots[i].slot] = 0;
+}
+
 }  // namespace
 
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
@@ -125,6 +287,9 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   std::vector<std::uint8_t> cand(nt * 4);
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k) cand[t * 4 + static_cast<std::size_t>(k)] = candidate(points, lim, face_of(dt, t, k));
+  bool any_filter = false;
+  for (auto f : p.filters) any_filter |= f != 0;
+  if (any_filter) apply_filters(points, dt, scale, p, cand);
 
   // Flood from outside the hull through non-candidate faces.
   std::vector<std::uint32_t> stack;

@@ -27,6 +27,11 @@ struct ReconParams {
   std::vector<std::uint8_t> vertex_class;
   /// Apply the peeling step.
   bool peel = true;
+  /// Thresholds of the candidate filters of thesis §2.3.2 (0 = off), in
+  /// units of 1/256 (spec "Reconstruction", 11.2a): circle radius, min/max
+  /// edge ratio, density, lone triangle (1 = on), neighbour circle radius
+  /// ratio, neighbour min/max edge ratio.
+  std::array<std::uint32_t, 6> filters{};
   /// Border vertices of an open surface (sorted, distinct).
   std::vector<std::uint32_t> border;
   /// Tetrahedra whose label is inverted after the rule (sorted, distinct).
@@ -59,6 +64,10 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
 /// The whole normative rule.
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
                            const ReconParams& p);
+
+/// Indices into ReconParams::filters.
+enum FilterId { kCircleRadius = 0, kEdgeRatio = 1, kDensity = 2, kLone = 3, kNeighbourRadius = 4, kNeighbourRatio = 5 };
+constexpr int kFilterCount = 6;
 
 /// Exact comparison of triangle circumradii: sign of R²(a) − R²(b).
 int compare_circumradius(const std::vector<GridPoint>& points, const std::array<std::uint32_t, 3>& a,

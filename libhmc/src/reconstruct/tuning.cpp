@@ -253,6 +253,50 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   }
 }
 
+// Components (of faces joined by edges) and Euler characteristic of the
+// interface between inside and outside tetrahedra.
+std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside) {
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+    if (!inside[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && inside[u]) continue;
+      faces.push_back({dt.tets[t][kFaceVertices[k][0]], dt.tets[t][kFaceVertices[k][1]], dt.tets[t][kFaceVertices[k][2]]});
+    }
+  }
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
+  std::vector<std::uint32_t> verts;
+  for (std::uint32_t i = 0; i < faces.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      const std::uint64_t x = faces[i][a], y = faces[i][(a + 1) % 3];
+      edges.push_back({(std::min(x, y) << 32) | std::max(x, y), i});
+      verts.push_back(faces[i][a]);
+    }
+  std::sort(edges.begin(), edges.end());
+  std::sort(verts.begin(), verts.end());
+  const auto nv = static_cast<long>(std::unique(verts.begin(), verts.end()) - verts.begin());
+  std::vector<std::uint32_t> parent(faces.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  long ne = 0;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) {
+      parent[find(edges[j].second)] = find(edges[i].second);
+      ++j;
+    }
+    ++ne;
+    i = j;
+  }
+  std::size_t comps = 0;
+  for (std::uint32_t i = 0; i < parent.size(); ++i) comps += find(i) == i;
+  return {comps, nv - ne + static_cast<long>(faces.size())};
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
@@ -397,6 +441,37 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       }
     }
   }
+  // The thesis' filters (§2.3.2): keep each one that lowers the labels the
+  // rule gets wrong (or, on coarser levels, the repairs it needs).
+  {
+    const auto scale = local_scale(points, dt, best.scale_rank);
+    auto cost = [&](const ReconParams& p) {
+      const auto labels = rule_labels(points, dt, scale, p);
+      std::uint64_t m = 0;
+      if (in.approximate && fidelity != Fidelity::rule) {
+        auto repaired = labels;
+        repair(dt, repaired, want_all);
+        for (std::size_t t = 0; t < nt; ++t) m += labels[t] != repaired[t];
+        for (auto d : interface_defects(dt, repaired, want_all)) m += 64 * d;
+      } else {
+        for (std::size_t t = 0; t < nt; ++t) m += labels[t] != truth[t];
+      }
+      return m;
+    };
+    std::uint64_t current = cost(best);
+    const std::pair<int, std::uint32_t> tries[] = {{kCircleRadius, 512}, {kEdgeRatio, 16},       {kDensity, 1024},
+                                                   {kLone, 1},           {kNeighbourRadius, 4096}, {kNeighbourRatio, 32}};
+    for (const auto& [id, threshold] : tries) {
+      ReconParams p = best;
+      p.filters[static_cast<std::size_t>(id)] = threshold;
+      const std::uint64_t c = cost(p);
+      if (c < current) {
+        current = c;
+        best = p;
+      }
+    }
+    best_mismatch = current;
+  }
   if (fidelity != Fidelity::rule && in.approximate) {
     auto labels = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
     const auto rule = labels;
@@ -431,6 +506,12 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       }
       if (!any) break;
     }
+    // Thin flips must not change the topology either: if the surface's
+    // components or Euler characteristic differ from the input's, correct
+    // every mismatch.
+    if (interface_topology(dt, labels) != interface_topology(dt, truth))
+      for (std::size_t t = 0; t < nt; ++t)
+        if (labels[t] != truth[t]) toggled[t] = 1, labels[t] = truth[t];
     for (std::size_t t = 0; t < nt; ++t)
       if (toggled[t]) best.toggles.push_back(static_cast<std::uint32_t>(t));
   }

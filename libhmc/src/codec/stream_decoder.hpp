@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// Decoding chunk by chunk, and the streaming decoder built on it.
+//
+// ChunkDecoder is the whole-file decoder's per-chunk logic (spec "Decoding
+// process and output", steps 2-6): decode() in decoder.cpp runs it over the
+// chunks of a parsed container, and StreamDecoder runs it over chunks as
+// their last byte arrives. Both therefore apply the same order rules, the
+// same layer and reconstruction code and the same truncation rules.
+//
+// StreamDecoder does the container framing itself, incrementally: it keeps
+// only the chunk being received, checks each chunk's CRC once it is
+// complete, and hands it to the ChunkDecoder. A level is reported as soon as
+// the chunk that completes it (its layer chunk, or for surfaces and volumes
+// its RCON) has arrived.
+//
+// Difference from decode(): decode() checks the framing (chunk types,
+// lengths, CRCs, bytes after HEND) of the whole stream before interpreting
+// any chunk, and checks the size limit before reading anything. A streaming
+// decoder cannot see ahead: it reports the first defect in stream order, so
+// on a stream with several defects it may report a content error (say
+// bad_layer) where decode() reports a framing error further on (say
+// crc_mismatch), and it reports the levels complete before the defect. On
+// streams with at most one defect, and on every valid or cut stream, the
+// outcome (levels, points, simplices, status, truncation and warning) is the
+// same as decode()'s.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "container/container.hpp"
+#include "hmc/codec.hpp"
+
+namespace hmc::detail {
+
+/// The decoder's per-chunk state machine (defined in decoder.cpp). Raises
+/// StreamError like the rest of detail.
+class ChunkDecoder {
+ public:
+  explicit ChunkDecoder(const DecodeOptions& options);
+  ~ChunkDecoder();
+  ChunkDecoder(const ChunkDecoder&) = delete;
+  ChunkDecoder& operator=(const ChunkDecoder&) = delete;
+
+  /// The preamble's version bytes, recorded in the output.
+  void set_version(std::uint8_t major, std::uint8_t minor);
+  /// Interpret one complete chunk whose CRC has been checked. Returns true
+  /// when it completed a level (appended to result().levels).
+  bool chunk(const ChunkView& c);
+  /// The data ended: `tail.truncated` and `tail.truncation` say whether it
+  /// ended inside a chunk (other fields are ignored). Applies the truncation
+  /// rules: fails with Status::truncated when no level is complete, else sets
+  /// the output's warning and truncated flag when HEND was not read.
+  void finish(const ContainerView& tail);
+
+  /// What is decoded so far (levels coarsest first).
+  const Decoded& result() const;
+  Decoded take();
+  /// HEAD and SQNT have been read (kind, quantizer and declared levels are known).
+  bool header_ready() const;
+  /// HEND has been read.
+  bool ended() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+/// malloc/realloc/free-style functions with a user pointer; the streaming
+/// decoder takes its input buffer from them.
+struct RawAllocator {
+  void* (*malloc_fn)(void* user, std::size_t size) = nullptr;
+  void* (*realloc_fn)(void* user, void* ptr, std::size_t size) = nullptr;
+  void (*free_fn)(void* user, void* ptr) = nullptr;
+  void* user = nullptr;
+
+  /// malloc, realloc and free from the C library.
+  static RawAllocator system();
+};
+
+/// Incremental decoder: feed bytes in pieces of any size. Never throws.
+///
+/// After an error every later feed() and finish() returns the same error
+/// (a permanent failed state); the levels completed before it stay readable.
+class StreamDecoder {
+ public:
+  explicit StreamDecoder(const DecodeOptions& options = {}, const RawAllocator& alloc = RawAllocator::system());
+  ~StreamDecoder();
+  StreamDecoder(const StreamDecoder&) = delete;
+  StreamDecoder& operator=(const StreamDecoder&) = delete;
+
+  /// Consume `size` more bytes of the stream, decoding every chunk they
+  /// complete. Status::ok, or the stream's error. Feeding after finish()
+  /// is invalid_argument (and leaves the decoder as it was).
+  Status feed(const std::uint8_t* data, std::size_t size) noexcept;
+  /// No more bytes will come. Status::ok when the stream was complete or
+  /// was cut after at least one complete level (then result().warning says
+  /// where, and result().truncated whether a requested level is missing);
+  /// Status::truncated, an error, when no level is complete.
+  Status finish() noexcept;
+
+  /// Status::ok, or the error that put the decoder in its failed state.
+  Status status() const noexcept { return error_.status; }
+  bool failed() const noexcept { return error_.status != Status::ok; }
+  const Error& error() const noexcept { return error_; }
+  bool finished() const noexcept { return finished_; }
+  /// HEND has been read.
+  bool ended() const noexcept;
+  /// HEAD and SQNT have been read.
+  bool header_ready() const noexcept;
+  /// Levels decoded so far, coarsest first, and the stream's header fields.
+  const Decoded& result() const noexcept;
+  /// Bytes consumed so far.
+  std::uint64_t bytes_fed() const noexcept { return fed_; }
+
+ private:
+  enum class Stage { preamble, chunk_header, chunk_body, ended };
+  void consume(const std::uint8_t* data, std::size_t size);  // raises StreamError
+  void complete_chunk(const ChunkType& type, std::uint32_t length, const std::uint8_t* body);
+  void reserve(std::size_t n);
+  void release() noexcept;
+  ContainerView tail() const;
+
+  DecodeOptions options_;
+  RawAllocator alloc_;
+  ChunkDecoder chunks_;
+  Error error_{Status::ok, {}};
+  bool finished_ = false;
+  Stage stage_ = Stage::preamble;
+  std::uint64_t fed_ = 0;            // bytes consumed
+  std::uint64_t chunk_offset_ = 0;   // stream offset of the chunk being received
+  std::uint8_t head_[kPreambleSize > 8 ? kPreambleSize : 8] = {};  // preamble or chunk header bytes
+  std::size_t head_len_ = 0;
+  ChunkType type_{};
+  std::uint32_t length_ = 0;         // payload length of the chunk being received
+  std::uint8_t* body_ = nullptr;     // payload + CRC of the chunk being received
+  std::size_t body_len_ = 0, body_cap_ = 0;
+};
+
+}  // namespace hmc::detail
