@@ -104,6 +104,7 @@ struct LevelPlan {
   std::vector<GridPoint> added;    // points this level adds to the next coarser one
   ReconParams params;
   Reconstruction rec;
+  Tetrahedralization dt;  // kept for the finest level only
   LevelReport report;
 };
 
@@ -145,7 +146,8 @@ std::vector<std::uint32_t> index_in(const std::vector<GridPoint>& points, const 
 // Reconstruction side information and result for one level.
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
-                         Fidelity fidelity, bool coarser) {
+                         Fidelity fidelity, const LevelPlan* finest) {
+  const bool coarser = finest != nullptr;
   const auto idx = index_in(fine_points, plan.points);
   std::vector<Triangle> faces;  // input faces whose vertices all survive, on this level
   for (const auto& f : fine.surface)
@@ -159,6 +161,12 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.surface = &fine.surface;
   // Coarser levels only approximate the input; exact fidelity still follows it.
   ti.approximate = coarser && fidelity != Fidelity::exact;
+  if (coarser) {
+    // Coarser levels keep the topology of the finest level's surface.
+    const auto [comps, euler] = interface_topology(finest->dt, finest->rec.inside);
+    ti.target_components = comps;
+    ti.target_euler = euler;
+  }
   TuningReport tr;
   plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
   plan.rec = reconstruct(plan.points, dt, kind, plan.params);
@@ -203,7 +211,8 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     const bool more = k + 1 < options.levels && plan.points.size() > 4;
     Tetrahedralization dt;
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
-    if (rep.kind != Kind::points) plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity, k > 0);
+    if (rep.kind != Kind::points)
+      plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity, k > 0 ? &plans.front() : nullptr);
     if (more) {
       LevelMesh mesh;
       mesh.points = &plan.points;
@@ -233,6 +242,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
       if (plan.added.empty()) current.clear();
     }
     plan.report.simplices = rep.kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
+    if (k == 0) plan.dt = std::move(dt);
     plans.push_back(std::move(plan));
     if (current.empty()) break;
   }

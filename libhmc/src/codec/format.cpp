@@ -154,7 +154,7 @@ std::vector<std::uint32_t> read_index_list(ByteReader& r, std::uint64_t bound, c
 
 std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   ByteWriter w;
-  w.u8(p.peel ? 1 : 0);
+  w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0)));
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
@@ -184,8 +184,9 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
-  if (flags > 1) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
+  if (flags > 3) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
   p.peel = flags & 1;
+  p.repair = (flags & 2) != 0;
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");

@@ -58,7 +58,7 @@ void StreamDecoder::reserve(std::size_t n) {
   if (n <= body_cap_) return;
   // Grow geometrically up to the chunk's size, never beyond what has
   // arrived: a header may declare 2 GiB that never come.
-  std::size_t cap = body_cap_ ? body_cap_ : 4096;
+  std::size_t cap = body_cap_ ? body_cap_ : 256;
   while (cap < n) cap = cap > (SIZE_MAX >> 1) ? n : cap * 2;
   const std::size_t whole = std::size_t{length_} + 4;
   if (cap > whole) cap = whole;

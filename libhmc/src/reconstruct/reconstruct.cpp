@@ -207,6 +207,113 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     if (!keep[face_of_slot[i]]) cand[slots[i].slot] = 0;
 }
 
+// Local soundness of the interface around vertex v: 1 if v should be on it
+// and is not, plus 1 per incident edge used by other than 0 or 2 faces.
+int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                  const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
+                  const std::vector<std::uint8_t>& want, std::uint32_t v, std::vector<std::uint32_t>& scratch) {
+  scratch.clear();
+  for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+    const std::uint32_t t = incident[i];
+    if (!inside[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && inside[u]) continue;
+      const auto& tet = dt.tets[t];
+      if (tet[k] == v) continue;  // the face opposite v does not contain it
+      for (int j = 0; j < 3; ++j) {
+        const std::uint32_t w = tet[kFaceVertices[k][j]];
+        if (w != v) scratch.push_back(w);
+      }
+    }
+  }
+  int d = (want[v] && scratch.empty()) ? 1 : 0;
+  std::sort(scratch.begin(), scratch.end());
+  for (std::size_t i = 0; i < scratch.size();) {
+    std::size_t j = i;
+    while (j < scratch.size() && scratch[j] == scratch[i]) ++j;
+    d += (j - i) != 2;
+    i = j;
+  }
+  return d;
+}
+
+// Greedy local search: flip tetrahedra around unsound vertices while that
+// strictly reduces the defects of the vertices involved and keeps the
+// interface's Euler characteristic (no handles or components appear).
+void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, const std::vector<std::uint8_t>& want) {
+  const std::size_t n = want.size(), nt = dt.tets.size();
+  std::vector<std::uint32_t> start(n + 1, 0), incident(nt * 4);
+  for (const auto& t : dt.tets)
+    for (auto v : t) ++start[v + 1];
+  for (std::size_t v = 0; v < n; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (std::uint32_t t = 0; t < nt; ++t)
+    for (auto v : dt.tets[t]) incident[fill[v]++] = t;
+  std::vector<std::uint32_t> scratch;
+  auto exposed = [&](std::uint32_t t, int k) {
+    if (!inside[t]) return false;
+    const std::uint32_t u = dt.neighbors[t][k];
+    return u == kNoTet || !inside[u];
+  };
+  // Is the edge (a, b) on a face of the interface? Faces containing it
+  // belong to tetrahedra incident to a.
+  auto edge_on = [&](std::uint32_t a, std::uint32_t b) {
+    for (std::uint32_t i = start[a]; i < start[a + 1]; ++i) {
+      const std::uint32_t t = incident[i];
+      const auto& tet = dt.tets[t];
+      if (tet[0] != b && tet[1] != b && tet[2] != b && tet[3] != b) continue;
+      for (int k = 0; k < 4; ++k)
+        if (tet[k] != a && tet[k] != b && exposed(t, k)) return true;
+    }
+    return false;
+  };
+  auto vertex_on = [&](std::uint32_t v) {
+    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
+      for (int k = 0; k < 4; ++k)
+        if (dt.tets[incident[i]][k] != v && exposed(incident[i], k)) return true;
+    return false;
+  };
+  // Euler characteristic of the interface restricted to t's own vertices,
+  // edges and faces: the only ones flipping t can change.
+  auto local_euler = [&](std::uint32_t t) {
+    const auto& tet = dt.tets[t];
+    int chi = 0;
+    for (auto v : tet) chi += vertex_on(v);
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) chi -= edge_on(tet[i], tet[j]);
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      const bool a = inside[t] != 0, b = u != kNoTet && inside[u];
+      chi += a != b;
+    }
+    return chi;
+  };
+  auto around = [&](std::uint32_t t) {
+    int d = 0;
+    for (auto v : dt.tets[t]) d += local_defects(dt, inside, start, incident, want, v, scratch);
+    return d;
+  };
+  for (int round = 0; round < 6; ++round) {
+    bool changed = false;
+    for (std::uint32_t v = 0; v < n; ++v) {
+      if (local_defects(dt, inside, start, incident, want, v, scratch) == 0) continue;
+      for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+        const std::uint32_t t = incident[i];
+        const int before = around(t), chi = local_euler(t);
+        inside[t] ^= 1;
+        if (around(t) < before && local_euler(t) == chi) {
+          changed = true;
+          if (local_defects(dt, inside, start, incident, want, v, scratch) == 0) break;
+        } else {
+          inside[t] ^= 1;
+        }
+      }
+    }
+    if (!changed) break;
+  }
+}
+
 }  // namespace
 
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
@@ -365,6 +472,14 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   return inside;
 }
 
+void repair_labels(const Tetrahedralization& dt, Kind kind, std::vector<std::uint8_t>& inside) {
+  std::size_t n = 0;
+  for (const auto& t : dt.tets)
+    for (auto v : t) n = std::max<std::size_t>(n, std::size_t{v} + 1);
+  const std::vector<std::uint8_t> want(n, kind == Kind::surface ? 1 : 0);
+  repair(dt, inside, want);
+}
+
 Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vector<std::uint8_t>& inside,
                        const ReconParams& p) {
   Reconstruction r;
@@ -404,6 +519,7 @@ Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedr
   if (kind == Kind::points) return {};
   const auto scale = local_scale(points, dt, p.scale_rank);
   auto inside = rule_labels(points, dt, scale, p);
+  if (p.repair) repair_labels(dt, kind, inside);
   for (std::uint32_t t : p.toggles) {
     if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
     inside[t] ^= 1;

@@ -27,6 +27,10 @@ struct ReconParams {
   std::vector<std::uint8_t> vertex_class;
   /// Apply the peeling step.
   bool peel = true;
+  /// Apply the repair step (spec 11.4a): make every point a vertex of the
+  /// surface and every edge manifold where local flips can, keeping the
+  /// topology.
+  bool repair = false;
   /// Thresholds of the candidate filters of thesis §2.3.2 (0 = off), in
   /// units of 1/256 (spec "Reconstruction", 11.2a): circle radius, min/max
   /// edge ratio, density, lone triangle (1 = on), neighbour circle radius
@@ -55,6 +59,13 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
 /// non-candidate faces, then peeling).
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p);
+
+/// The normative repair step (spec 11.4a) on rule labels: greedy local
+/// flips around unsound vertices (surface kind: points off the surface;
+/// both kinds: edges with other than two faces), each kept only if it
+/// lowers the defects of the flipped tetrahedron's vertices and keeps the
+/// surface's local Euler characteristic.
+void repair_labels(const Tetrahedralization& dt, Kind kind, std::vector<std::uint8_t>& inside);
 
 /// Surface or volume from final labels (toggles applied by the caller);
 /// of `p` only the border and drop lists are used.

@@ -10,6 +10,8 @@
 
 namespace hmc::detail {
 
+std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside);
+
 namespace {
 
 using Face = std::array<std::uint32_t, 3>;
@@ -146,112 +148,22 @@ std::vector<std::uint32_t> hole_faces(const std::vector<GridPoint>& points, cons
   return drops;
 }
 
-// Local soundness of the interface around vertex v: 1 if v should be on it
-// and is not, plus 1 per incident edge used by other than 0 or 2 faces.
-int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
-                  const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
-                  const std::vector<std::uint8_t>& want, std::uint32_t v, std::vector<std::uint32_t>& scratch) {
-  scratch.clear();
-  for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
-    const std::uint32_t t = incident[i];
-    if (!inside[t]) continue;
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      if (u != kNoTet && inside[u]) continue;
-      const auto& tet = dt.tets[t];
-      if (tet[k] == v) continue;  // the face opposite v does not contain it
-      for (int j = 0; j < 3; ++j) {
-        const std::uint32_t w = tet[kFaceVertices[k][j]];
-        if (w != v) scratch.push_back(w);
-      }
-    }
+// What a repaired coarser level still gets wrong: unsound vertices, and a
+// topology other than the input's (weighted far above any defect).
+std::uint64_t approximation_penalty(const Tetrahedralization& dt, const std::vector<std::uint8_t>& labels,
+                                    const std::vector<std::uint8_t>& want, const TuneInput& in) {
+  std::uint64_t m = 0;
+  for (auto d : interface_defects(dt, labels, want)) m += d;
+  if (in.target_components) {
+    const auto [comps, euler] = interface_topology(dt, labels);
+    m += 100 * static_cast<std::uint64_t>(std::labs(euler - in.target_euler));
+    m += 100 * static_cast<std::uint64_t>(comps > in.target_components ? comps - in.target_components
+                                                                        : in.target_components - comps);
   }
-  int d = (want[v] && scratch.empty()) ? 1 : 0;
-  std::sort(scratch.begin(), scratch.end());
-  for (std::size_t i = 0; i < scratch.size();) {
-    std::size_t j = i;
-    while (j < scratch.size() && scratch[j] == scratch[i]) ++j;
-    d += (j - i) != 2;
-    i = j;
-  }
-  return d;
+  return m;
 }
 
-// Greedy local search: flip tetrahedra around unsound vertices while that
-// strictly reduces the defects of the vertices involved and keeps the
-// interface's Euler characteristic (no handles or components appear).
-void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, const std::vector<std::uint8_t>& want) {
-  const std::size_t n = want.size(), nt = dt.tets.size();
-  std::vector<std::uint32_t> start(n + 1, 0), incident(nt * 4);
-  for (const auto& t : dt.tets)
-    for (auto v : t) ++start[v + 1];
-  for (std::size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (std::uint32_t t = 0; t < nt; ++t)
-    for (auto v : dt.tets[t]) incident[fill[v]++] = t;
-  std::vector<std::uint32_t> scratch;
-  auto exposed = [&](std::uint32_t t, int k) {
-    if (!inside[t]) return false;
-    const std::uint32_t u = dt.neighbors[t][k];
-    return u == kNoTet || !inside[u];
-  };
-  // Is the edge (a, b) on a face of the interface? Faces containing it
-  // belong to tetrahedra incident to a.
-  auto edge_on = [&](std::uint32_t a, std::uint32_t b) {
-    for (std::uint32_t i = start[a]; i < start[a + 1]; ++i) {
-      const std::uint32_t t = incident[i];
-      const auto& tet = dt.tets[t];
-      if (tet[0] != b && tet[1] != b && tet[2] != b && tet[3] != b) continue;
-      for (int k = 0; k < 4; ++k)
-        if (tet[k] != a && tet[k] != b && exposed(t, k)) return true;
-    }
-    return false;
-  };
-  auto vertex_on = [&](std::uint32_t v) {
-    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
-      for (int k = 0; k < 4; ++k)
-        if (dt.tets[incident[i]][k] != v && exposed(incident[i], k)) return true;
-    return false;
-  };
-  // Euler characteristic of the interface restricted to t's own vertices,
-  // edges and faces: the only ones flipping t can change.
-  auto local_euler = [&](std::uint32_t t) {
-    const auto& tet = dt.tets[t];
-    int chi = 0;
-    for (auto v : tet) chi += vertex_on(v);
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) chi -= edge_on(tet[i], tet[j]);
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      const bool a = inside[t] != 0, b = u != kNoTet && inside[u];
-      chi += a != b;
-    }
-    return chi;
-  };
-  auto around = [&](std::uint32_t t) {
-    int d = 0;
-    for (auto v : dt.tets[t]) d += local_defects(dt, inside, start, incident, want, v, scratch);
-    return d;
-  };
-  for (int round = 0; round < 6; ++round) {
-    bool changed = false;
-    for (std::uint32_t v = 0; v < n; ++v) {
-      if (local_defects(dt, inside, start, incident, want, v, scratch) == 0) continue;
-      for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
-        const std::uint32_t t = incident[i];
-        const int before = around(t), chi = local_euler(t);
-        inside[t] ^= 1;
-        if (around(t) < before && local_euler(t) == chi) {
-          changed = true;
-          if (local_defects(dt, inside, start, incident, want, v, scratch) == 0) break;
-        } else {
-          inside[t] ^= 1;
-        }
-      }
-    }
-    if (!changed) break;
-  }
-}
+}  // namespace
 
 // Components (of faces joined by edges) and Euler characteristic of the
 // interface between inside and outside tetrahedra.
@@ -296,8 +208,6 @@ std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, co
   for (std::uint32_t i = 0; i < parent.size(); ++i) comps += find(i) == i;
   return {comps, nv - ne + static_cast<long>(faces.size())};
 }
-
-}  // namespace
 
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
@@ -394,6 +304,9 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     std::vector<std::uint32_t> sorted_ratio(ratio);
     std::sort(sorted_ratio.begin(), sorted_ratio.end());
     for (int classes : {1, 2, 4, 8, 16}) {
+      // Coarser levels are repaired by the decoder; classes, tuned to the
+      // input's edges, would only cost bits there.
+      if (in.approximate && classes > 1) break;
       ReconParams p;
       p.scale_rank = rank;
       p.border = border;
@@ -419,16 +332,14 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       }
       for (bool peel : {false, true}) {
         p.peel = peel;
-        const auto labels = rule_labels(points, dt, scale, p);
+        p.repair = in.approximate && fidelity != Fidelity::rule;
+        auto labels = rule_labels(points, dt, scale, p);
         std::uint64_t mism = 0;
-        if (in.approximate && fidelity != Fidelity::rule) {
-          // A coarser level pays for the repairs of the rule's result.
-          auto repaired = labels;
-          repair(dt, repaired, want_all);
-          for (std::size_t t = 0; t < nt; ++t) mism += labels[t] != repaired[t];
-          // Defects repair could not remove weigh far more than any toggle.
-          const auto left = interface_defects(dt, repaired, want_all);
-          for (auto d : left) mism += 64 * d;
+        if (p.repair) {
+          // A coarser level relies on the decoder's repair; what it cannot
+          // mend would need corrections.
+          repair_labels(dt, kind, labels);
+          mism += approximation_penalty(dt, labels, want_all, in);
         } else {
           for (std::size_t t = 0; t < nt; ++t) mism += labels[t] != truth[t];
         }
@@ -446,13 +357,11 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   {
     const auto scale = local_scale(points, dt, best.scale_rank);
     auto cost = [&](const ReconParams& p) {
-      const auto labels = rule_labels(points, dt, scale, p);
+      auto labels = rule_labels(points, dt, scale, p);
       std::uint64_t m = 0;
-      if (in.approximate && fidelity != Fidelity::rule) {
-        auto repaired = labels;
-        repair(dt, repaired, want_all);
-        for (std::size_t t = 0; t < nt; ++t) m += labels[t] != repaired[t];
-        for (auto d : interface_defects(dt, repaired, want_all)) m += 64 * d;
+      if (p.repair) {
+        repair_labels(dt, kind, labels);
+        m += approximation_penalty(dt, labels, want_all, in);
       } else {
         for (std::size_t t = 0; t < nt; ++t) m += labels[t] != truth[t];
       }
@@ -472,12 +381,8 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     }
     best_mismatch = current;
   }
-  if (fidelity != Fidelity::rule && in.approximate) {
-    auto labels = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
-    const auto rule = labels;
-    repair(dt, labels, want_all);
-    for (std::size_t t = 0; t < nt; ++t)
-      if (labels[t] != rule[t]) best.toggles.push_back(static_cast<std::uint32_t>(t));
+  if (best.repair) {
+    // The decoder repairs the rule's labels itself: nothing to correct.
   } else if (fidelity != Fidelity::rule) {
     const double tolerance = fidelity == Fidelity::exact ? -1.0
                              : in.shape_tolerance >= 0 ? in.shape_tolerance

@@ -30,6 +30,10 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
                                        const std::vector<Triangle>& input_faces_on_points);
 
+/// Components (of faces joined by edges) and Euler characteristic of the
+/// surface between inside and outside tetrahedra.
+std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside);
+
 /// What tuning chose and what it costs.
 struct TuningReport {
   std::uint64_t mismatches_before_toggles = 0;
@@ -49,6 +53,10 @@ struct TuneInput {
   /// following `truth`, keep the rule's labels and correct only what makes
   /// the surface unsound (vertices left off it, non-manifold edges).
   bool approximate = false;
+  /// Components and Euler characteristic the surface should keep (those of
+  /// the finest level's input); components 0: unknown.
+  std::size_t target_components = 0;
+  long target_euler = 0;
 };
 
 /// Side information for `in.truth`: alpha classes, peeling, the border

@@ -1,0 +1,395 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// The streaming decoder: fed in pieces of any size (down to one byte), it
+// outputs what decode() outputs for the same bytes — levels, points,
+// simplices, warnings, truncation and error classes — and reports each
+// level as soon as its last byte is in.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "codec/stream_decoder.hpp"
+#include "hmc/codec.hpp"
+#include "hmc/hmc.hpp"
+#include "samples.hpp"
+
+using namespace hmc;
+using hmc::detail::StreamDecoder;
+
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+struct Sample {
+  std::string name;
+  Bytes bytes;
+};
+
+Bytes encode_sample(const Mesh& m, int levels, std::optional<Kind> kind = std::nullopt, int bits = 12) {
+  EncodeOptions o;
+  o.levels = levels;
+  o.kind = kind;
+  o.bits = bits;
+  o.boundary_mode = BoundaryMode::linear;
+  auto e = encode(m, o);
+  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  return std::move(e).value().bytes;
+}
+
+// Multi-level streams of each kind, built once.
+const std::vector<Sample>& samples_of_each_kind() {
+  static const std::vector<Sample> s = [] {
+    std::vector<Sample> v;
+    v.push_back({"points", encode_sample(samples::random_ball(600, 11), 3, Kind::points)});
+    v.push_back({"surface", encode_sample(samples::torus(40, 16), 4)});
+    v.push_back({"volume", encode_sample(samples::random_ball(400, 7), 3, Kind::volume)});
+    v.push_back({"single-level surface", encode_sample(samples::uv_sphere(8, 16), 1, std::nullopt, 10)});
+    return v;
+  }();
+  return s;
+}
+
+// Outcome of a decode: the result or the error, comparable field by field.
+struct Outcome {
+  Status status = Status::ok;
+  std::string message;  // error message
+  Decoded decoded;
+};
+
+Outcome whole(const std::uint8_t* data, std::size_t size, const DecodeOptions& o = {}) {
+  auto r = decode(data, size, o);
+  if (!r) return {r.status(), r.error().message, {}};
+  return {Status::ok, {}, std::move(r).value()};
+}
+
+// Feeds `size` bytes in pieces drawn by `next_piece`, checking after each
+// piece that every level whose last byte is in has been reported.
+template <class Next>
+Outcome streamed(const std::uint8_t* data, std::size_t size, Next next_piece, const DecodeOptions& o = {},
+                 const Decoded* reference = nullptr) {
+  StreamDecoder sd(o);
+  std::size_t pos = 0;
+  while (pos < size) {
+    const std::size_t n = std::min(size - pos, next_piece());
+    const Status s = sd.feed(data + pos, n);
+    pos += n;
+    if (s != Status::ok) return {s, sd.error().message, {}};
+    CHECK(sd.bytes_fed() == pos);
+    if (reference) {
+      // Exactly the levels whose prefix is in are complete (or all the requested ones).
+      std::size_t expect = 0;
+      for (const auto& l : reference->levels) expect += l.stream_bytes <= pos;
+      CHECK(sd.result().levels.size() == expect);
+    }
+  }
+  const Status s = sd.finish();
+  if (s != Status::ok) return {s, sd.error().message, {}};
+  CHECK(sd.finished());
+  return {Status::ok, {}, sd.result()};
+}
+
+// `messages`: also compare error messages (they differ where the streaming
+// decoder cannot know what follows: the count of bytes after HEND, the size
+// of a stream over the byte limit).
+void check_same(const Outcome& a, const Outcome& b, bool messages = true) {
+  REQUIRE(status_name(a.status) == std::string(status_name(b.status)));
+  if (messages) CHECK(a.message == b.message);
+  if (a.status != Status::ok) return;
+  const Decoded& x = a.decoded;
+  const Decoded& y = b.decoded;
+  CHECK(x.kind == y.kind);
+  CHECK(x.quantizer.bits == y.quantizer.bits);
+  CHECK(x.quantizer.origin == y.quantizer.origin);
+  CHECK(x.quantizer.step == y.quantizer.step);
+  CHECK(x.version_major == y.version_major);
+  CHECK(x.version_minor == y.version_minor);
+  CHECK(x.declared_points == y.declared_points);
+  CHECK(x.info == y.info);
+  CHECK(x.truncated == y.truncated);
+  CHECK(x.warning == y.warning);
+  CHECK(x.vector_quantizer.has_value() == y.vector_quantizer.has_value());
+  REQUIRE(x.levels.size() == y.levels.size());
+  for (std::size_t i = 0; i < x.levels.size(); ++i) {
+    CAPTURE(i);
+    CHECK(x.levels[i].lod == y.levels[i].lod);
+    CHECK(x.levels[i].stream_bytes == y.levels[i].stream_bytes);
+    CHECK(x.levels[i].points == y.levels[i].points);
+    CHECK(x.levels[i].triangles == y.levels[i].triangles);
+    CHECK(x.levels[i].tetrahedra == y.levels[i].tetrahedra);
+  }
+}
+
+// Piece sizes: 1 byte, fixed sizes, and random sizes spanning 1 byte to
+// several chunks.
+struct Pieces {
+  std::mt19937_64 rng;
+  std::size_t max;
+  std::size_t operator()() {
+    // Log-uniform: small pieces often, large ones sometimes.
+    std::uniform_real_distribution<double> u(0.0, std::log(static_cast<double>(max)));
+    return std::max<std::size_t>(1, static_cast<std::size_t>(std::exp(u(rng))));
+  }
+};
+
+void check_stream_equivalence(const Bytes& b, const DecodeOptions& o = {}) {
+  const Outcome ref = whole(b.data(), b.size(), o);
+  const Decoded* levels = ref.status == Status::ok ? &ref.decoded : nullptr;
+  {
+    INFO("1-byte pieces");
+    check_same(streamed(b.data(), b.size(), [] { return std::size_t{1}; }, o, levels), ref);
+  }
+  {
+    INFO("the whole stream in one piece");
+    check_same(streamed(b.data(), b.size(), [&] { return b.size(); }, o, levels), ref);
+  }
+  for (std::size_t fixed : {2, 3, 7, 64, 1000}) {
+    INFO("pieces of " << fixed);
+    check_same(streamed(b.data(), b.size(), [&] { return fixed; }, o, levels), ref);
+  }
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    INFO("random pieces, seed " << seed);
+    check_same(streamed(b.data(), b.size(), Pieces{std::mt19937_64(seed), b.size()}, o, levels), ref);
+  }
+}
+
+std::vector<std::size_t> chunk_boundaries(const Bytes& b) {
+  std::vector<std::size_t> v;
+  std::size_t pos = 10;
+  while (pos + 8 <= b.size()) {
+    v.push_back(pos);
+    const std::uint32_t len = std::uint32_t{b[pos + 4]} | std::uint32_t{b[pos + 5]} << 8 |
+                              std::uint32_t{b[pos + 6]} << 16 | std::uint32_t{b[pos + 7]} << 24;
+    pos += 12 + std::size_t{len};
+  }
+  v.push_back(b.size());
+  return v;
+}
+
+Bytes read_file(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+TEST_CASE("streaming equals whole-stream decoding, for every kind and piece size") {
+  for (const auto& s : samples_of_each_kind()) {
+    CAPTURE(s.name);
+    const Outcome ref = whole(s.bytes.data(), s.bytes.size());
+    REQUIRE(ref.status == Status::ok);
+    CHECK(ref.decoded.warning.empty());
+    if (s.name != "single-level surface") CHECK(ref.decoded.levels.size() >= 3);
+    if (s.name == "volume") CHECK_FALSE(ref.decoded.finest().tetrahedra.empty());
+    if (s.name == "surface") CHECK_FALSE(ref.decoded.finest().triangles.empty());
+    check_stream_equivalence(s.bytes);
+  }
+}
+
+TEST_CASE("streaming with options: a coarser requested level, points only") {
+  for (const auto& s : samples_of_each_kind()) {
+    CAPTURE(s.name);
+    DecodeOptions o;
+    o.finest_level = 1;
+    check_stream_equivalence(s.bytes, o);
+    DecodeOptions p;
+    p.reconstruct = false;
+    Pieces pieces{std::mt19937_64(9), 300};
+    check_same(streamed(s.bytes.data(), s.bytes.size(), pieces, p), whole(s.bytes.data(), s.bytes.size(), p));
+  }
+}
+
+TEST_CASE("a level is reported the moment its last byte is in, not before") {
+  const Bytes& b = samples_of_each_kind()[1].bytes;  // surface, 4 levels
+  const Outcome ref = whole(b.data(), b.size());
+  REQUIRE(ref.decoded.levels.size() == 4);
+  StreamDecoder sd;
+  std::size_t reported = 0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    REQUIRE(sd.feed(&b[i], 1) == Status::ok);
+    const std::size_t n = sd.result().levels.size();
+    if (n != reported) {
+      REQUIRE(n == reported + 1);  // one level per byte at most: one RCON chunk completes it
+      CHECK(i + 1 == ref.decoded.levels[reported].stream_bytes);
+      CHECK(sd.result().levels.back().points == ref.decoded.levels[reported].points);
+      CHECK(sd.result().levels.back().triangles == ref.decoded.levels[reported].triangles);
+      reported = n;
+    }
+  }
+  CHECK(reported == 4);
+  CHECK(sd.ended());
+  CHECK(sd.finish() == Status::ok);
+}
+
+TEST_CASE("cut streams: the same levels, warning, truncation and errors as decode()") {
+  for (const auto& s : samples_of_each_kind()) {
+    CAPTURE(s.name);
+    const Bytes& b = s.bytes;
+    // Every chunk boundary, one byte either side, and cuts inside the preamble.
+    std::vector<std::size_t> cuts = {0, 1, 5, 8, 9, 10, 11, 17};
+    for (std::size_t at : chunk_boundaries(b)) {
+      cuts.push_back(at);
+      cuts.push_back(at - 1);
+      if (at + 1 < b.size()) cuts.push_back(at + 1);
+    }
+    std::mt19937_64 rng(3);
+    for (int i = 0; i < 20; ++i) cuts.push_back(std::uniform_int_distribution<std::size_t>(0, b.size())(rng));
+    for (std::size_t n : cuts) {
+      CAPTURE(n);
+      const Outcome ref = whole(b.data(), n);
+      Pieces pieces{std::mt19937_64(n), 200};
+      check_same(streamed(b.data(), n, pieces), ref);
+      check_same(streamed(b.data(), n, [] { return std::size_t{1}; }), ref);
+    }
+  }
+}
+
+TEST_CASE("damaged streams: the same error class as decode(), and a permanent failed state") {
+  const Bytes& good = samples_of_each_kind()[0].bytes;  // points, 3 levels
+  std::mt19937_64 rng(5);
+  std::vector<std::size_t> at = {0, 3, 8, 9, 10, 12, 14, 22};
+  for (std::size_t c : chunk_boundaries(good))
+    if (c + 8 < good.size()) at.insert(at.end(), {c, c + 4, c + 7, c + 8});
+  for (int i = 0; i < 60; ++i) at.push_back(std::uniform_int_distribution<std::size_t>(0, good.size() - 1)(rng));
+  for (std::size_t i : at) {
+    for (int mask : {0x01, 0x80, 0xff}) {
+      Bytes b = good;
+      b[i] = static_cast<std::uint8_t>(b[i] ^ mask);
+      CAPTURE(i);
+      CAPTURE(mask);
+      const Outcome ref = whole(b.data(), b.size());
+      const Outcome got = streamed(b.data(), b.size(), Pieces{std::mt19937_64(i), 100});
+      CHECK(status_name(got.status) == std::string(status_name(ref.status)));
+      if (ref.status == Status::ok) check_same(got, ref);
+    }
+  }
+  // Bytes after the end chunk.
+  Bytes extra = good;
+  extra.push_back(0);
+  CHECK(whole(extra.data(), extra.size()).status == Status::bad_chunk);
+  StreamDecoder sd;
+  CHECK(sd.feed(extra.data(), good.size()) == Status::ok);
+  CHECK(sd.ended());
+  CHECK(sd.feed(extra.data() + good.size(), 1) == Status::bad_chunk);
+  // Failed for good, with the levels completed before the error still there.
+  CHECK(sd.failed());
+  CHECK(sd.feed(good.data(), 1) == Status::bad_chunk);
+  CHECK(sd.finish() == Status::bad_chunk);
+  CHECK(sd.result().levels.size() == 3);
+}
+
+TEST_CASE("limits apply to streams fed in pieces") {
+  const Bytes& b = samples_of_each_kind()[1].bytes;
+  DecodeOptions o;
+  o.limits.max_bytes = b.size() - 1;
+  CHECK(whole(b.data(), b.size(), o).status == Status::limit_exceeded);
+  CHECK(streamed(b.data(), b.size(), [] { return std::size_t{1}; }, o).status == Status::limit_exceeded);
+  o.limits.max_bytes = b.size();
+  check_stream_equivalence(b, o);
+  DecodeOptions p;
+  p.limits.max_points = 10;
+  check_same(streamed(b.data(), b.size(), [] { return std::size_t{3}; }, p), whole(b.data(), b.size(), p));
+  DecodeOptions l;
+  l.limits.max_levels = 2;
+  check_same(streamed(b.data(), b.size(), [] { return std::size_t{5}; }, l), whole(b.data(), b.size(), l));
+}
+
+TEST_CASE("the C API's streaming decoder (through hmc.hpp) matches whole-buffer decoding") {
+  for (const auto& s : samples_of_each_kind()) {
+    CAPTURE(s.name);
+    const Bytes& b = s.bytes;
+    const Outcome ref = whole(b.data(), b.size());
+    REQUIRE(ref.status == Status::ok);
+    auto dec = capi::Decoder::create();
+    REQUIRE(dec.ok());
+    capi::Decoder& d = dec.value();
+    Pieces pieces{std::mt19937_64(17), 500};
+    std::size_t pos = 0, seen = 0;
+    while (pos < b.size()) {
+      const std::size_t n = std::min(b.size() - pos, pieces());
+      auto r = d.feed(b.data() + pos, n);
+      REQUIRE_MESSAGE(r.ok(), r.error().to_string());
+      pos += n;
+      for (; seen < r.value(); ++seen) {
+        const DecodedLevel& want = ref.decoded.levels[seen];
+        CHECK(want.stream_bytes <= pos);
+        auto info = d.level_info(seen);
+        REQUIRE(info.ok());
+        CHECK(info.value().lod == want.lod);
+        CHECK(info.value().point_count == want.points.size());
+        auto pts = d.points(seen);
+        REQUIRE(pts.ok());
+        REQUIRE(pts.value().size() == 3 * want.points.size());
+        for (std::size_t i = 0; i < want.points.size(); ++i)
+          for (std::size_t a = 0; a < 3; ++a) REQUIRE(pts.value()[3 * i + a] == want.points[i][a]);
+        auto pos3 = d.positions(seen);
+        REQUIRE(pos3.ok());
+        for (std::size_t i = 0; i < want.points.size(); ++i) {
+          const Vec3 v = ref.decoded.quantizer.dequantize(want.points[i]);
+          for (std::size_t a = 0; a < 3; ++a) REQUIRE(pos3.value()[3 * i + a] == v[a]);
+        }
+        auto tri = d.triangles(seen);
+        auto tet = d.tetrahedra(seen);
+        REQUIRE(tri.ok());
+        REQUIRE(tet.ok());
+        REQUIRE(tri.value().size() == 3 * want.triangles.size());
+        REQUIRE(tet.value().size() == 4 * want.tetrahedra.size());
+        for (std::size_t i = 0; i < want.triangles.size(); ++i)
+          for (std::size_t a = 0; a < 3; ++a) REQUIRE(tri.value()[3 * i + a] == want.triangles[i][a]);
+        for (std::size_t i = 0; i < want.tetrahedra.size(); ++i)
+          for (std::size_t a = 0; a < 4; ++a) REQUIRE(tet.value()[4 * i + a] == want.tetrahedra[i][a]);
+      }
+    }
+    auto end = d.finish();
+    REQUIRE(end.ok());
+    CHECK(end.value() == HMC_OK);
+    CHECK(seen == ref.decoded.levels.size());
+    const hmc_stream_info info = d.stream_info();
+    CHECK(info.header_ready);
+    CHECK(info.ended);
+    CHECK(info.kind == static_cast<int>(ref.decoded.kind));
+    CHECK(info.declared_levels == ref.decoded.declared_points.size());
+    CHECK(info.bytes_consumed == b.size());
+  }
+  // A cut stream ends as incomplete, with its complete levels.
+  const Bytes& b = samples_of_each_kind()[1].bytes;
+  const Outcome ref = whole(b.data(), b.size() - 20);
+  REQUIRE(ref.status == Status::ok);
+  auto d = capi::Decoder::create();
+  REQUIRE(d.ok());
+  REQUIRE(d.value().feed(b.data(), b.size() - 20).ok());
+  auto end = d.value().finish();
+  REQUIRE(end.ok());
+  CHECK(end.value() == HMC_INCOMPLETE);
+  CHECK(d.value().message() == ref.decoded.warning);
+  CHECK(d.value().level_count() == ref.decoded.levels.size());
+  CHECK(d.value().stream_info().truncated == 1);
+}
+
+TEST_CASE("conformance vectors, if present, decode the same streamed as whole") {
+  const std::filesystem::path dir = std::filesystem::path(HMC_SOURCE_DIR) / "conformance" / "vectors";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec)) {
+    MESSAGE("no conformance/vectors folder: skipped");
+    return;
+  }
+  std::vector<std::filesystem::path> streams;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const auto p = e.path() / "stream.hmc";
+    if (std::filesystem::is_regular_file(p, ec)) streams.push_back(p);
+  }
+  std::sort(streams.begin(), streams.end());
+  MESSAGE(streams.size() << " conformance streams");
+  for (const auto& p : streams) {
+    CAPTURE(p.parent_path().filename().string());
+    const Bytes b = read_file(p);
+    const Outcome ref = whole(b.data(), b.size());
+    const Decoded* levels = ref.status == Status::ok ? &ref.decoded : nullptr;
+    check_same(streamed(b.data(), b.size(), [] { return std::size_t{1}; }, {}, levels), ref, false);
+    check_same(streamed(b.data(), b.size(), Pieces{std::mt19937_64(b.size()), 4096}, {}, levels), ref, false);
+  }
+}
