@@ -27,15 +27,28 @@ TARGETS="container huffman base_layer decode roundtrip"
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+# -O1 with line tables only: the usual sanitizer setting, and compiles in
+# less than half the CPU time of -O2 -g (stack traces keep file:line).
+OPT="-O1 -g1 -DNDEBUG"
 LOGS=$(mktemp -d)
 trap 'rm -rf "$LOGS"' EXIT INT TERM
 
 # build_asan CC CXX: configure and build $ASAN_BUILD; output in $LOGS/build.log.
+# The test sources are compiled first: they do not wait for the library, and
+# they are where a compiler that rejects the tree usually says so (then the
+# fallback costs seconds, not a whole library build).
 build_asan() {
   cmake -S "$HMC_ROOT" -B "$ASAN_BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_C_FLAGS_RELWITHDEBINFO="$OPT" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$OPT" \
     -DCMAKE_C_COMPILER="$1" -DCMAKE_CXX_COMPILER="$2" -DHMC_SANITIZE=address,undefined \
-    -DHMC_BUILD_BENCH=OFF >"$LOGS/build.log" 2>&1 &&
-    cmake --build "$ASAN_BUILD" -j "$JOBS" >>"$LOGS/build.log" 2>&1
+    -DHMC_BUILD_BENCH=OFF >"$LOGS/build.log" 2>&1 || return 1
+  test_objects=$(ninja -C "$ASAN_BUILD" -t targets all 2>/dev/null |
+                 sed -n 's#^\(tests/CMakeFiles/[^:]*\.o\): .*#\1#p')
+  if [ -n "$test_objects" ]; then
+    # shellcheck disable=SC2086
+    ninja -C "$ASAN_BUILD" -j "$JOBS" $test_objects >>"$LOGS/build.log" 2>&1 || return 1
+  fi
+  cmake --build "$ASAN_BUILD" -j "$JOBS" >>"$LOGS/build.log" 2>&1
 }
 
 start=$(date +%s)
@@ -73,6 +86,7 @@ fi
 
 fstart=$(date +%s)
 cmake -S "$HMC_ROOT" -B "$FUZZ_BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_C_FLAGS_RELWITHDEBINFO="$OPT" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$OPT" \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DHMC_BUILD_FUZZ=ON -DHMC_BUILD_TESTS=OFF -DHMC_BUILD_TOOLS=OFF -DHMC_BUILD_BENCH=OFF >/dev/null
 fuzz_bins=""

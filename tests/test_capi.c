@@ -344,11 +344,19 @@ static void test_errors(void) {
   uint8_t *bytes = encode_torus(40, 16, 3, &size);
   uint8_t *bad = malloc(size);
   hmc_decoder *d;
+  hmc_level_info li;
+  size_t at;
   char message[512];
 
-  /* A damaged byte inside the last chunks: CRC mismatch, whole or streamed. */
+  /* A damaged byte in the finest level's layer chunk: CRC mismatch, whole
+   * or streamed. */
+  d = hmc_decoder_create(NULL);
+  CHECK_STATUS(hmc_decoder_decode(d, bytes, size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_level_info(d, 1, &li), HMC_OK);
+  hmc_decoder_destroy(d);
+  at = (size_t)li.stream_bytes + 20;
   memcpy(bad, bytes, size);
-  bad[size - 30] = (uint8_t)(bad[size - 30] ^ 0x10);
+  bad[at] = (uint8_t)(bad[at] ^ 0x10);
   d = hmc_decoder_create(NULL);
   CHECK_STATUS(hmc_decoder_decode(d, bad, size), HMC_CRC_MISMATCH);
   CHECK(strstr(hmc_decoder_message(d), "CRC") != NULL);
@@ -356,8 +364,8 @@ static void test_errors(void) {
   hmc_decoder_destroy(d);
 
   d = hmc_decoder_create(NULL);
-  CHECK_STATUS(hmc_decoder_feed(d, bad, size / 2), HMC_OK);
-  CHECK_STATUS(hmc_decoder_feed(d, bad + size / 2, size - size / 2), HMC_CRC_MISMATCH);
+  CHECK_STATUS(hmc_decoder_feed(d, bad, at), HMC_OK);
+  CHECK_STATUS(hmc_decoder_feed(d, bad + at, size - at), HMC_CRC_MISMATCH);
   strncpy(message, hmc_decoder_message(d), sizeof message - 1);
   message[sizeof message - 1] = 0;
   CHECK(strlen(message) > 0);
@@ -392,6 +400,18 @@ static void test_errors(void) {
   d = hmc_decoder_create(NULL);
   CHECK_STATUS(hmc_decoder_feed(d, bytes, size), HMC_OK);
   CHECK_STATUS(hmc_decoder_feed(d, "x", 1), HMC_BAD_CHUNK);
+  hmc_decoder_destroy(d);
+
+  /* Errors as the whole-buffer decoder reports them: held until the end. */
+  memcpy(bad, bytes, size);
+  bad[at] = (uint8_t)(bad[at] ^ 0x10);
+  d = hmc_decoder_create(NULL);
+  CHECK_STATUS(hmc_decoder_set_error_order(d, 7), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_decoder_set_error_order(d, HMC_ERRORS_AS_WHOLE), HMC_OK);
+  CHECK_STATUS(hmc_decoder_feed(d, bad, size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_feed(d, "xy", 2), HMC_OK);
+  CHECK_STATUS(hmc_decoder_finish(d), HMC_CRC_MISMATCH);
+  CHECK_STATUS(hmc_decoder_set_error_order(d, HMC_ERRORS_IN_STREAM_ORDER), HMC_INVALID_ARGUMENT);
   hmc_decoder_destroy(d);
 
   free(bad);

@@ -47,7 +47,7 @@ int cmd_dec(int argc, char** argv) {
   if (!dec) return report(in, dec.error(), Stage::input);
   const auto t1 = std::chrono::steady_clock::now();
   const Decoded& d = dec.value();
-  if (d.truncated) std::fprintf(stderr, "hmc: warning: %s: %s\n", in.c_str(), d.warning.c_str());
+  if (!d.warning.empty()) std::fprintf(stderr, "hmc: warning: %s: %s\n", in.c_str(), d.warning.c_str());
   if (opt.finest_level > 0 && d.finest().lod > opt.finest_level)
     std::fprintf(stderr, "hmc: warning: %s: level %d is not in the stream; the finest decoded level is %d\n", in.c_str(),
                  opt.finest_level, d.finest().lod);
@@ -90,7 +90,7 @@ int cmd_dec(int argc, char** argv) {
     j.begin_object();
     j.key("input").value(in).key("kind").value(kind_name(d.kind)).key("q").value(d.quantizer.bits);
     j.key("levels_declared").value(d.level_count()).key("truncated").value(d.truncated);
-    if (d.truncated) j.key("warning").value(d.warning);
+    if (!d.warning.empty()) j.key("warning").value(d.warning);
     j.key("decode_seconds").value(secs);
     j.key("levels").begin_array();
     for (const auto& l : d.levels) {

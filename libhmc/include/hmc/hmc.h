@@ -38,11 +38,14 @@
  * level, ::HMC_TRUNCATED (an error) when it was cut before.
  *
  * The levels, points and simplices a streaming decoder outputs are those
- * hmc_decoder_decode() outputs for the same bytes. One difference: the
- * whole-buffer decoder checks the framing (chunk types, lengths, CRCs) of
- * the whole stream before interpreting any chunk, while a streaming decoder
- * meets defects in stream order, so on a stream with several defects the
- * two may report different error classes.
+ * hmc_decoder_decode() outputs for the same bytes, and so are the warning
+ * and truncation of a cut stream. Errors: the whole-buffer decoder checks
+ * the size limit, then the framing (chunk types, lengths, CRCs) of the whole
+ * stream, and only then interprets chunks (spec section 13). By default a
+ * streaming decoder fails at once on the first defect in stream order, so on
+ * a stream with several defects it may report another error class;
+ * hmc_decoder_set_error_order() with ::HMC_ERRORS_AS_WHOLE makes it report
+ * exactly what hmc_decoder_decode() reports, at hmc_decoder_finish().
  *
  * **Threads.** A handle must not be used by two threads at once.
  *
@@ -155,20 +158,25 @@ typedef enum hmc_optimizer {
  * nothing. All three are required.
  */
 typedef struct hmc_allocator {
-  void *(*malloc_fn)(void *user, size_t size);
-  void *(*realloc_fn)(void *user, void *ptr, size_t size);
-  void (*free_fn)(void *user, void *ptr);
+  void *(*malloc_fn)(void *user, size_t size);             /**< like malloc(size) */
+  void *(*realloc_fn)(void *user, void *ptr, size_t size); /**< like realloc(ptr, size) */
+  void (*free_fn)(void *user, void *ptr);                  /**< like free(ptr) */
   void *user; /**< passed to each function unchanged */
 } hmc_allocator;
 
-/** The library version, "MAJOR.MINOR.PATCH". Never NULL. */
+/** The library's version.
+ *  @return "MAJOR.MINOR.PATCH", a static string (never NULL) */
 HMC_API const char *hmc_version_string(void);
 
-/** Stable lower-case name of a status, e.g. "crc_mismatch", "incomplete";
- *  "unknown_status" for a value that is not a status. Never NULL. */
+/** The stable name of a status.
+ *  @param status any value
+ *  @return a static lower-case identifier, e.g. "crc_mismatch", "incomplete";
+ *          "unknown_status" for a value that is not a status (never NULL) */
 HMC_API const char *hmc_status_string(hmc_status status);
 
-/** One-sentence English description of a status. Never NULL. */
+/** A description of a status.
+ *  @param status any value
+ *  @return a static one-sentence English description (never NULL) */
 HMC_API const char *hmc_status_description(hmc_status status);
 
 /**
@@ -199,7 +207,8 @@ typedef struct hmc_encode_options {
   int write_info;       /**< non-zero: write the ancillary `info` chunk (default 1) */
 } hmc_encode_options;
 
-/** Fill `options` with the defaults. Does nothing when `options` is NULL. */
+/** Fill encoder settings with the defaults.
+ *  @param options the settings to fill; NULL does nothing */
 HMC_API void hmc_encode_options_init(hmc_encode_options *options);
 
 /**
@@ -210,11 +219,14 @@ HMC_API void hmc_encode_options_init(hmc_encode_options *options);
  */
 HMC_API hmc_encoder *hmc_encoder_create(const hmc_allocator *allocator);
 
-/** Destroy an encoder. NULL does nothing. Buffers it returned stay valid. */
+/** Destroy an encoder. Buffers it returned stay valid.
+ *  @param encoder the encoder; NULL does nothing */
 HMC_API void hmc_encoder_destroy(hmc_encoder *encoder);
 
 /**
  * Replace the encoder's settings.
+ * @param encoder the encoder
+ * @param options the new settings (copied), from hmc_encode_options_init() then changed
  * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT when a field is out of range
  *         (the settings are then unchanged)
  */
@@ -246,9 +258,10 @@ HMC_API hmc_status hmc_encoder_encode(hmc_encoder *encoder, const double *xyz, s
                                       const uint32_t *tetrahedra, size_t tetrahedron_count,
                                       uint8_t **out_bytes, size_t *out_size);
 
-/** What the encoder's last failing call was about; "" if none. The string
- *  belongs to the encoder and is valid until its next call. Never NULL
- *  (a NULL encoder gives ""). */
+/** What the encoder's last failing call was about.
+ *  @param encoder the encoder (NULL gives "")
+ *  @return the message, "" if none; it belongs to the encoder and is valid
+ *          until the encoder's next call (never NULL) */
 HMC_API const char *hmc_encoder_message(const hmc_encoder *encoder);
 
 /** @} */
@@ -270,7 +283,8 @@ typedef struct hmc_decoder hmc_decoder;
  */
 HMC_API hmc_decoder *hmc_decoder_create(const hmc_allocator *allocator);
 
-/** Destroy a decoder. NULL does nothing. Buffers it returned stay valid. */
+/** Destroy a decoder. Buffers it returned stay valid.
+ *  @param decoder the decoder; NULL does nothing */
 HMC_API void hmc_decoder_destroy(hmc_decoder *decoder);
 
 /**
@@ -288,31 +302,63 @@ HMC_API hmc_status hmc_decoder_set_limits(hmc_decoder *decoder, uint64_t max_poi
                                           uint64_t max_bytes);
 
 /**
- * The decoder's limits. Any output pointer may be NULL.
+ * The decoder's limits.
+ * @param decoder         the decoder
+ * @param[out] max_points receives the points limit, or NULL
+ * @param[out] max_levels receives the levels limit, or NULL
+ * @param[out] max_bytes  receives the bytes limit, or NULL
  * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT when `decoder` is NULL
  */
 HMC_API hmc_status hmc_decoder_get_limits(const hmc_decoder *decoder, uint64_t *max_points, uint32_t *max_levels,
                                           uint64_t *max_bytes);
 
 /**
- * Stop after level `level` (0 = the finest, the default): finer levels are
- * checked for chunk order only. A stream cut before that level is complete
- * is *truncated* (::hmc_stream_info.truncated). Only before decoding begins.
+ * Stop after a level: finer levels are checked for chunk order only. A
+ * stream cut before that level is complete is *truncated*
+ * (::hmc_stream_info.truncated). Only before decoding begins.
+ * @param decoder the decoder
+ * @param level   the finest level wanted, 0 (the finest of the stream, the default) to 63
  * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT (negative, above 63, or decoding has begun)
  */
 HMC_API hmc_status hmc_decoder_set_finest_level(hmc_decoder *decoder, int level);
 
 /**
- * Whether to rebuild triangles or tetrahedra (default non-zero). With 0
- * only points are decoded; the side information is still validated. Only
- * before decoding begins.
+ * Whether to rebuild triangles or tetrahedra. Only before decoding begins.
+ * @param decoder     the decoder
+ * @param reconstruct non-zero (the default): rebuild them; 0: decode only
+ *                    points (the side information is still validated)
  * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT when decoding has begun
  */
 HMC_API hmc_status hmc_decoder_set_reconstruct(hmc_decoder *decoder, int reconstruct);
 
+/** When a decoder fed in pieces reports a defect of the stream. */
+typedef enum hmc_error_order {
+  /** At once: the hmc_decoder_feed() that meets the first defect in stream
+   *  order fails with it (the default). */
+  HMC_ERRORS_IN_STREAM_ORDER = 0,
+  /** As hmc_decoder_decode() would for the whole stream (spec section 13:
+   *  the size limit, then framing errors anywhere, then content errors):
+   *  a defect is held, later bytes are still checked for framing, and
+   *  hmc_decoder_finish() reports what ranks first. Exceeding the byte
+   *  limit is reported at once. No level is completed after a defect. */
+  HMC_ERRORS_AS_WHOLE = 1
+} hmc_error_order;
+
 /**
- * Decode a whole stream held in memory (the bytes are only read during the
- * call). Only on a decoder that has not decoded or been fed yet.
+ * Choose when a decoder fed in pieces reports defects. Only before decoding
+ * begins; hmc_decoder_decode() always reports as ::HMC_ERRORS_AS_WHOLE.
+ * @param decoder the decoder
+ * @param order   an ::hmc_error_order
+ * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT (unknown order, or decoding has begun)
+ */
+HMC_API hmc_status hmc_decoder_set_error_order(hmc_decoder *decoder, int order);
+
+/**
+ * Decode a whole stream held in memory. Only on a decoder that has not
+ * decoded or been fed yet.
+ * @param decoder the decoder
+ * @param data    the stream (only read during the call; NULL when `size` is 0)
+ * @param size    its length in bytes
  * @return ::HMC_OK; ::HMC_INCOMPLETE when the stream stops before its end
  *         chunk but after a complete level; an error otherwise (the decoder
  *         is then failed; ::HMC_TRUNCATED when no level is complete)
@@ -320,11 +366,15 @@ HMC_API hmc_status hmc_decoder_set_reconstruct(hmc_decoder *decoder, int reconst
 HMC_API hmc_status hmc_decoder_decode(hmc_decoder *decoder, const void *data, size_t size);
 
 /**
- * Give the decoder the next `size` bytes of the stream, in pieces of any
- * size (0 is allowed). Every chunk the bytes complete is checked and decoded
- * during the call; a level whose last chunk arrives is complete when the call
- * returns (see hmc_decoder_level_count()). The bytes are only read during the
- * call: the decoder copies the part of a chunk it still waits for.
+ * Give the decoder the next bytes of the stream, in pieces of any size.
+ * Every chunk the bytes complete is checked and decoded during the call; a
+ * level whose last chunk arrives is complete when the call returns (see
+ * hmc_decoder_level_count()).
+ * @param decoder the decoder
+ * @param data    the next bytes; only read during the call (the decoder
+ *                copies the part of a chunk it still waits for); NULL when
+ *                `size` is 0
+ * @param size    how many (0 is allowed)
  * @return ::HMC_OK; an error in the stream (the decoder is then failed, and
  *         the levels completed before the error stay readable);
  *         ::HMC_INVALID_ARGUMENT after hmc_decoder_finish() or hmc_decoder_decode()
@@ -333,6 +383,7 @@ HMC_API hmc_status hmc_decoder_feed(hmc_decoder *decoder, const void *data, size
 
 /**
  * The stream has ended: no more bytes will come.
+ * @param decoder the decoder
  * @return ::HMC_OK when the stream was complete (its end chunk was read);
  *         ::HMC_INCOMPLETE when it stopped after at least one complete level
  *         (the levels complete so far are the result, hmc_decoder_message()
@@ -343,21 +394,26 @@ HMC_API hmc_status hmc_decoder_feed(hmc_decoder *decoder, const void *data, size
 HMC_API hmc_status hmc_decoder_finish(hmc_decoder *decoder);
 
 /**
- * The decoder's state: ::HMC_OK while decoding or after a complete stream,
- * ::HMC_INCOMPLETE after a cut stream, or the error it failed with.
+ * The decoder's state.
+ * @param decoder the decoder
+ * @return ::HMC_OK while decoding or after a complete stream,
+ *         ::HMC_INCOMPLETE after a cut stream, or the error it failed with
+ *         (::HMC_INVALID_ARGUMENT for a NULL decoder)
  */
 HMC_API hmc_status hmc_decoder_status(const hmc_decoder *decoder);
 
-/** What the decoder's last non-OK status was about (an error, or where an
- *  incomplete stream stopped); "" if none. The string belongs to the decoder
- *  and is valid until its next call. Never NULL (a NULL decoder gives ""). */
+/** What the decoder's last non-OK status was about: an error, or where an
+ *  incomplete stream stopped.
+ *  @param decoder the decoder (NULL gives "")
+ *  @return the message, "" if none; it belongs to the decoder and is valid
+ *          until the decoder's next call (never NULL) */
 HMC_API const char *hmc_decoder_message(const hmc_decoder *decoder);
 
 /** The stream's header and progress. */
 typedef struct hmc_stream_info {
   int header_ready;          /**< non-zero once `HEAD` and `SQNT` are read; the fields below up to `declared_points` are valid only then */
-  int version_major;         /**< stream version */
-  int version_minor;
+  int version_major;         /**< stream major version */
+  int version_minor;         /**< stream minor version */
   int kind;                  /**< an ::hmc_kind */
   int bits;                  /**< q: the grid has 2^q cells per axis */
   double origin[3];          /**< position of grid point (0, 0, 0) */
@@ -371,13 +427,17 @@ typedef struct hmc_stream_info {
 } hmc_stream_info;
 
 /**
- * Fill `info` with the stream's header and progress; valid at any time.
+ * The stream's header and progress, at any time.
+ * @param decoder   the decoder
+ * @param[out] info receives them
  * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT when a pointer is NULL
  */
 HMC_API hmc_status hmc_decoder_stream_info(const hmc_decoder *decoder, hmc_stream_info *info);
 
-/** Number of complete levels so far; they are numbered 0 (the coarsest) to
- *  this count - 1 (the finest so far). 0 for a NULL decoder. */
+/** The number of complete levels so far.
+ *  @param decoder the decoder
+ *  @return the count; levels are numbered 0 (the coarsest) to count - 1 (the
+ *          finest so far); 0 for a NULL decoder */
 HMC_API size_t hmc_decoder_level_count(const hmc_decoder *decoder);
 
 /** One decoded level's figures. */
@@ -390,7 +450,10 @@ typedef struct hmc_level_info {
 } hmc_level_info;
 
 /**
- * Figures of complete level `index` (0 = the coarsest).
+ * Figures of a complete level.
+ * @param decoder   the decoder
+ * @param index     the level, 0 = the coarsest
+ * @param[out] info receives them
  * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT (NULL pointer, index not below
  *         hmc_decoder_level_count())
  */
@@ -399,10 +462,10 @@ HMC_API hmc_status hmc_decoder_level_info(const hmc_decoder *decoder, size_t ind
 /**
  * Grid points of a complete level, in canonical order (ascending x, then y,
  * then z): 3 * `*out_count` integers, each below 2^q.
- * @param decoder       the decoder
- * @param index         the level, 0 = the coarsest
- * @param[out] out_xyz  receives the array, allocated with the decoder's
- *                      allocator (NULL when empty); free it with hmc_free()
+ * @param decoder        the decoder
+ * @param index          the level, 0 = the coarsest
+ * @param[out] out_xyz   receives the array, allocated with the decoder's
+ *                       allocator (NULL when empty); free it with hmc_free()
  * @param[out] out_count receives the number of points
  * @return ::HMC_OK, ::HMC_INVALID_ARGUMENT or ::HMC_OUT_OF_MEMORY
  */
@@ -412,7 +475,12 @@ HMC_API hmc_status hmc_decoder_level_points(const hmc_decoder *decoder, size_t i
 /**
  * Positions of a complete level's points (origin + grid * step, in the
  * order of hmc_decoder_level_points()): 3 * `*out_count` doubles.
- * Allocation, ownership and status as hmc_decoder_level_points().
+ * @param decoder        the decoder
+ * @param index          the level, 0 = the coarsest
+ * @param[out] out_xyz   receives the array, allocated with the decoder's
+ *                       allocator (NULL when empty); free it with hmc_free()
+ * @param[out] out_count receives the number of points
+ * @return ::HMC_OK, ::HMC_INVALID_ARGUMENT or ::HMC_OUT_OF_MEMORY
  */
 HMC_API hmc_status hmc_decoder_level_positions(const hmc_decoder *decoder, size_t index, double **out_xyz,
                                                size_t *out_count);
@@ -421,7 +489,12 @@ HMC_API hmc_status hmc_decoder_level_positions(const hmc_decoder *decoder, size_
  * Rebuilt triangles of a complete level (kind surface; none otherwise or
  * without reconstruction): 3 * `*out_count` indices into the level's
  * points, counter-clockwise seen from outside, in canonical order.
- * Allocation, ownership and status as hmc_decoder_level_points().
+ * @param decoder          the decoder
+ * @param index            the level, 0 = the coarsest
+ * @param[out] out_indices receives the array, allocated with the decoder's
+ *                         allocator (NULL when empty); free it with hmc_free()
+ * @param[out] out_count   receives the number of triangles
+ * @return ::HMC_OK, ::HMC_INVALID_ARGUMENT or ::HMC_OUT_OF_MEMORY
  */
 HMC_API hmc_status hmc_decoder_level_triangles(const hmc_decoder *decoder, size_t index, uint32_t **out_indices,
                                                size_t *out_count);
@@ -429,7 +502,12 @@ HMC_API hmc_status hmc_decoder_level_triangles(const hmc_decoder *decoder, size_
 /**
  * Rebuilt tetrahedra of a complete level (kind volume): 4 * `*out_count`
  * indices into the level's points, positively oriented, in canonical order.
- * Allocation, ownership and status as hmc_decoder_level_points().
+ * @param decoder          the decoder
+ * @param index            the level, 0 = the coarsest
+ * @param[out] out_indices receives the array, allocated with the decoder's
+ *                         allocator (NULL when empty); free it with hmc_free()
+ * @param[out] out_count   receives the number of tetrahedra
+ * @return ::HMC_OK, ::HMC_INVALID_ARGUMENT or ::HMC_OUT_OF_MEMORY
  */
 HMC_API hmc_status hmc_decoder_level_tetrahedra(const hmc_decoder *decoder, size_t index, uint32_t **out_indices,
                                                 size_t *out_count);

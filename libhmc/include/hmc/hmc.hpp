@@ -38,8 +38,8 @@ namespace hmc::capi {
 
 /// A failed call: the status and the handle's message.
 struct Error {
-  hmc_status status = HMC_INTERNAL_ERROR;
-  std::string message;
+  hmc_status status = HMC_INTERNAL_ERROR;  ///< what failed
+  std::string message;                     ///< the handle's message: what was wrong and where
 
   /// "status_name: message".
   std::string to_string() const {
@@ -53,14 +53,20 @@ struct Error {
 template <class T>
 class Result {
  public:
+  /// A success holding `value`.
   Result(T value) : v_(std::move(value)) {}  // NOLINT(implicit)
+  /// A failure.
   Result(Error error) : v_(std::move(error)) {}  // NOLINT(implicit)
 
+  /// True when it holds a value.
   bool ok() const noexcept { return v_.index() == 0; }
+  /// ok().
   explicit operator bool() const noexcept { return ok(); }
   /// The value; only when ok().
   T& value() & { return std::get<0>(v_); }
+  /// The value; only when ok().
   const T& value() const& { return std::get<0>(v_); }
+  /// The value, moved out; only when ok().
   T&& value() && { return std::get<0>(std::move(v_)); }
   /// The error; only when !ok().
   const Error& error() const& { return std::get<1>(v_); }
@@ -76,10 +82,14 @@ struct Done {};
 
 /// Deleters for the C handles.
 struct Deleter {
+  /// hmc_encoder_destroy().
   void operator()(hmc_encoder* e) const noexcept { hmc_encoder_destroy(e); }
+  /// hmc_decoder_destroy().
   void operator()(hmc_decoder* d) const noexcept { hmc_decoder_destroy(d); }
 };
+/// An owned hmc_encoder.
 using EncoderHandle = std::unique_ptr<hmc_encoder, Deleter>;
+/// An owned hmc_decoder.
 using DecoderHandle = std::unique_ptr<hmc_decoder, Deleter>;
 
 /// A buffer returned by the C API: `size()` values of type T, freed with the
@@ -92,15 +102,25 @@ class Buffer {
   Buffer(T* data, std::size_t size, const hmc_allocator* allocator) noexcept
       : p_(data, Free{allocator ? *allocator : hmc_allocator{}, allocator != nullptr}), n_(size) {}
 
+  /// The values (null when empty).
   T* data() noexcept { return p_.get(); }
+  /// The values (null when empty).
   const T* data() const noexcept { return p_.get(); }
+  /// Number of values (for points: 3 per point).
   std::size_t size() const noexcept { return n_; }
+  /// True when there are no values.
   bool empty() const noexcept { return n_ == 0; }
+  /// Value `i`.
   T& operator[](std::size_t i) noexcept { return p_.get()[i]; }
+  /// Value `i`.
   const T& operator[](std::size_t i) const noexcept { return p_.get()[i]; }
+  /// Iteration over the values.
   T* begin() noexcept { return p_.get(); }
+  /// Iteration over the values.
   T* end() noexcept { return p_.get() + n_; }
+  /// Iteration over the values.
   const T* begin() const noexcept { return p_.get(); }
+  /// Iteration over the values.
   const T* end() const noexcept { return p_.get() + n_; }
 
  private:
@@ -147,7 +167,9 @@ class Encoder {
     return Buffer<std::uint8_t>(bytes, size, allocator());
   }
 
+  /// The C handle, still owned by this object.
   hmc_encoder* get() const noexcept { return h_.get(); }
+  /// hmc_encoder_message().
   std::string message() const { return hmc_encoder_message(h_.get()); }
 
  private:
@@ -179,11 +201,18 @@ class Decoder {
   }
   /// Stop after this level (hmc_decoder_set_finest_level()).
   Result<Done> set_finest_level(int level) { return check(hmc_decoder_set_finest_level(h_.get(), level)); }
+  /// When defects are reported when feeding (hmc_decoder_set_error_order()).
+  Result<Done> set_error_order(hmc_error_order order) {
+    return check(hmc_decoder_set_error_order(h_.get(), order));
+  }
   /// Rebuild triangles or tetrahedra, or only points (hmc_decoder_set_reconstruct()).
   Result<Done> set_reconstruct(bool on) { return check(hmc_decoder_set_reconstruct(h_.get(), on ? 1 : 0)); }
 
-  /// Decode a whole buffer. Value: HMC_OK, or HMC_INCOMPLETE for a stream
-  /// cut after a complete level (message() says where).
+  /// Decode a whole buffer (hmc_decoder_decode()).
+  /// @param data the stream
+  /// @param size its length in bytes
+  /// @return HMC_OK, or HMC_INCOMPLETE for a stream cut after a complete
+  ///         level (message() says where); or the error
   Result<hmc_status> decode(const void* data, std::size_t size) {
     return outcome(hmc_decoder_decode(h_.get(), data, size));
   }
@@ -193,8 +222,9 @@ class Decoder {
     if (s != HMC_OK) return error(s);
     return level_count();
   }
-  /// End of the stream. Value: HMC_OK, or HMC_INCOMPLETE for a stream cut
-  /// after a complete level.
+  /// End of the stream (hmc_decoder_finish()).
+  /// @return HMC_OK, or HMC_INCOMPLETE for a stream cut after a complete
+  ///         level (message() says where); or the error
   Result<hmc_status> finish() { return outcome(hmc_decoder_finish(h_.get())); }
 
   /// Complete levels so far, numbered from 0 (the coarsest).
@@ -205,6 +235,7 @@ class Decoder {
     hmc_decoder_stream_info(h_.get(), &i);
     return i;
   }
+  /// Figures of complete level `index` (0 = the coarsest).
   Result<hmc_level_info> level_info(std::size_t index) const {
     hmc_level_info i{};
     const hmc_status s = hmc_decoder_level_info(h_.get(), index, &i);
@@ -228,8 +259,11 @@ class Decoder {
     return take<std::uint32_t>(index, 4, hmc_decoder_level_tetrahedra);
   }
 
+  /// hmc_decoder_status().
   hmc_status status() const noexcept { return hmc_decoder_status(h_.get()); }
+  /// hmc_decoder_message().
   std::string message() const { return hmc_decoder_message(h_.get()); }
+  /// The C handle, still owned by this object.
   hmc_decoder* get() const noexcept { return h_.get(); }
 
  private:

@@ -124,6 +124,7 @@ struct hmc_decoder {
   explicit hmc_decoder(const hmc_allocator& a) : alloc(a) {}
   hmc_allocator alloc;
   hmc::DecodeOptions options;
+  hmc::detail::StreamDecoder::ErrorOrder order = hmc::detail::StreamDecoder::ErrorOrder::stream;
   std::optional<hmc::detail::StreamDecoder> stream;  // fed in pieces
   std::optional<Decoded> whole;                      // or decoded at once
   std::uint64_t whole_size = 0;
@@ -317,6 +318,18 @@ hmc_status hmc_decoder_set_reconstruct(hmc_decoder* decoder, int reconstruct) {
   });
 }
 
+hmc_status hmc_decoder_set_error_order(hmc_decoder* decoder, int order) {
+  if (!decoder) return HMC_INVALID_ARGUMENT;
+  return guard(decoder->message, [&]() -> hmc_status {
+    if (decoder->begun()) return decoder->misuse("the error order must be chosen before decoding begins");
+    if (order != HMC_ERRORS_IN_STREAM_ORDER && order != HMC_ERRORS_AS_WHOLE)
+      return decoder->misuse("unknown error order " + std::to_string(order));
+    decoder->order = order == HMC_ERRORS_AS_WHOLE ? hmc::detail::StreamDecoder::ErrorOrder::whole
+                                                  : hmc::detail::StreamDecoder::ErrorOrder::stream;
+    return HMC_OK;
+  });
+}
+
 hmc_status hmc_decoder_decode(hmc_decoder* decoder, const void* data, size_t size) {
   if (!decoder) return HMC_INVALID_ARGUMENT;
   const hmc_status s = guard(decoder->message, [&]() -> hmc_status {
@@ -345,7 +358,7 @@ hmc_status hmc_decoder_feed(hmc_decoder* decoder, const void* data, size_t size)
     }
     if (!data && size) return decoder->misuse("data is NULL");
     if (decoder->finished || decoder->whole) return decoder->misuse("the stream was finished: nothing can be fed");
-    if (!decoder->stream) decoder->stream.emplace(decoder->options, raw(decoder->alloc));
+    if (!decoder->stream) decoder->stream.emplace(decoder->options, raw(decoder->alloc), decoder->order);
     const Status st = decoder->stream->feed(static_cast<const std::uint8_t*>(data), size);
     if (st != Status::ok) return decoder->fail(to_c(st), decoder->stream->error().message);
     return HMC_OK;
@@ -365,7 +378,7 @@ hmc_status hmc_decoder_finish(hmc_decoder* decoder) {
       if (decoder->state == HMC_INCOMPLETE) decoder->message = decoder->result()->warning;
       return decoder->state;
     }
-    if (!decoder->stream) decoder->stream.emplace(decoder->options, raw(decoder->alloc));
+    if (!decoder->stream) decoder->stream.emplace(decoder->options, raw(decoder->alloc), decoder->order);
     const Status st = decoder->stream->finish();
     if (st != Status::ok) return decoder->fail(to_c(st), decoder->stream->error().message);
     return decoder->finished_ok(decoder->stream->result());

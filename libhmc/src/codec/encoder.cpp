@@ -161,12 +161,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.surface = &fine.surface;
   // Coarser levels only approximate the input; exact fidelity still follows it.
   ti.approximate = coarser && fidelity != Fidelity::exact;
-  if (coarser) {
-    // Coarser levels keep the topology of the finest level's surface.
-    const auto [comps, euler] = interface_topology(finest->dt, finest->rec.inside);
-    ti.target_components = comps;
-    ti.target_euler = euler;
-  }
+  (void)finest;  // topology targets are not used yet: see tune()
   TuningReport tr;
   plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
   plan.rec = reconstruct(plan.points, dt, kind, plan.params);

@@ -39,8 +39,8 @@ RawAllocator RawAllocator::system() {
   return a;
 }
 
-StreamDecoder::StreamDecoder(const DecodeOptions& options, const RawAllocator& alloc)
-    : options_(options), alloc_(alloc), chunks_(options) {}
+StreamDecoder::StreamDecoder(const DecodeOptions& options, const RawAllocator& alloc, ErrorOrder order)
+    : options_(options), alloc_(alloc), order_(order), chunks_(options) {}
 
 StreamDecoder::~StreamDecoder() { release(); }
 
@@ -84,6 +84,11 @@ Status StreamDecoder::finish() noexcept {
   if (failed() || finished_) return error_.status;
   finished_ = true;
   error_ = guarded<Error>([&] {
+    if (held_) {
+      if (held_after_end_)
+        held_->message = std::to_string(fed_ - end_offset_) + " byte(s) follow the end chunk " + to_string(kEnd);
+      return *held_;
+    }
     chunks_.finish(tail());
     return Error{Status::ok, {}};
   });
@@ -112,7 +117,8 @@ ContainerView StreamDecoder::tail() const {
                      " (" + std::to_string(length_) + "-byte payload declared, " + std::to_string(body_len_) +
                      " bytes left)";
       break;
-    case Stage::ended: break;
+    case Stage::ended:
+    case Stage::skip: break;
   }
   v.ended = !v.truncated;
   return v;
@@ -130,7 +136,16 @@ void StreamDecoder::complete_chunk(const ChunkType& type, std::uint32_t length, 
   c.offset = static_cast<std::size_t>(chunk_offset_);
   c.length = length;
   c.payload = body;
-  chunks_.chunk(c);
+  if (order_ == ErrorOrder::stream) {
+    chunks_.chunk(c);
+  } else if (!held_) {  // after a content error, chunks are checked for framing only
+    try {
+      chunks_.chunk(c);
+    } catch (const StreamError& e) {
+      held_ = e.error();
+    }
+  }
+  if (type == kEnd) end_offset_ = chunk_offset_ + kChunkOverhead + length;
   stage_ = type == kEnd ? Stage::ended : Stage::chunk_header;
   head_len_ = 0;
   body_len_ = 0;
@@ -141,6 +156,23 @@ void StreamDecoder::consume(const std::uint8_t* p, std::size_t n) {
   if (fed_ > max || n > max - fed_)
     fail(Status::limit_exceeded, "the stream has at least " + std::to_string(fed_ + n) +
                                      " bytes, over the limit of " + std::to_string(max));
+  if (order_ == ErrorOrder::stream) return parse(p, n);
+  // ErrorOrder::whole: a framing error outranks any content error held, and
+  // ends parsing; the bytes after it are only counted (for the size limit).
+  const std::uint64_t end = fed_ + n;
+  if (stage_ != Stage::skip) {
+    try {
+      parse(p, n);
+    } catch (const StreamError& e) {
+      held_ = e.error();
+      held_after_end_ = stage_ == Stage::ended;
+      stage_ = Stage::skip;
+    }
+  }
+  fed_ = end;
+}
+
+void StreamDecoder::parse(const std::uint8_t* p, std::size_t n) {
   while (n) {
     switch (stage_) {
       case Stage::preamble: {
@@ -200,6 +232,7 @@ void StreamDecoder::consume(const std::uint8_t* p, std::size_t n) {
       }
       case Stage::ended:
         fail(Status::bad_chunk, std::to_string(n) + " byte(s) follow the end chunk " + to_string(kEnd));
+      case Stage::skip: return;
     }
   }
 }

@@ -13,21 +13,30 @@
 // the chunk that completes it (its layer chunk, or for surfaces and volumes
 // its RCON) has arrived.
 //
-// Difference from decode(): decode() checks the framing (chunk types,
-// lengths, CRCs, bytes after HEND) of the whole stream before interpreting
-// any chunk, and checks the size limit before reading anything. A streaming
-// decoder cannot see ahead: it reports the first defect in stream order, so
-// on a stream with several defects it may report a content error (say
-// bad_layer) where decode() reports a framing error further on (say
-// crc_mismatch), and it reports the levels complete before the defect. On
-// streams with at most one defect, and on every valid or cut stream, the
-// outcome (levels, points, simplices, status, truncation and warning) is the
-// same as decode()'s.
+// Errors. decode() checks the size limit before reading anything, then the
+// framing (signature, version, chunk types, lengths, CRCs, bytes after
+// HEND) of the whole stream, and only then interprets chunks (spec section
+// 13). A streaming decoder cannot see ahead, so it offers two orders:
+//  - ErrorOrder::stream (the default): it fails at once on the first defect
+//    in stream order. On a stream with several defects it may then report a
+//    content error (say bad_layer) where decode() reports a framing error
+//    further on (say crc_mismatch), or a framing error where decode()
+//    reports the size limit.
+//  - ErrorOrder::whole: it reports what decode() reports. A defect is held
+//    (later bytes are still checked for framing, or only counted after a
+//    framing error) and becomes the error at finish(), unless a defect that
+//    decode() ranks first turns up (a framing error after a content error;
+//    the size limit at any time, reported at once).
+// Either way the levels complete before the first defect are reported as
+// they arrive. On valid and cut streams, and (in stream order) on streams
+// with one defect, the outcome (levels, points, simplices, status,
+// truncation and warning) is the same as decode()'s.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -87,7 +96,11 @@ struct RawAllocator {
 /// (a permanent failed state); the levels completed before it stay readable.
 class StreamDecoder {
  public:
-  explicit StreamDecoder(const DecodeOptions& options = {}, const RawAllocator& alloc = RawAllocator::system());
+  /// When errors are reported (see the top of this file).
+  enum class ErrorOrder { stream, whole };
+
+  explicit StreamDecoder(const DecodeOptions& options = {}, const RawAllocator& alloc = RawAllocator::system(),
+                         ErrorOrder order = ErrorOrder::stream);
   ~StreamDecoder();
   StreamDecoder(const StreamDecoder&) = delete;
   StreamDecoder& operator=(const StreamDecoder&) = delete;
@@ -117,8 +130,10 @@ class StreamDecoder {
   std::uint64_t bytes_fed() const noexcept { return fed_; }
 
  private:
-  enum class Stage { preamble, chunk_header, chunk_body, ended };
+  // skip: ErrorOrder::whole after a framing error; bytes are only counted.
+  enum class Stage { preamble, chunk_header, chunk_body, ended, skip };
   void consume(const std::uint8_t* data, std::size_t size);  // raises StreamError
+  void parse(const std::uint8_t* data, std::size_t size);    // raises StreamError
   void complete_chunk(const ChunkType& type, std::uint32_t length, const std::uint8_t* body);
   void reserve(std::size_t n);
   void release() noexcept;
@@ -126,6 +141,10 @@ class StreamDecoder {
 
   DecodeOptions options_;
   RawAllocator alloc_;
+  ErrorOrder order_;
+  std::optional<Error> held_;      // ErrorOrder::whole: what decode() would report so far
+  bool held_after_end_ = false;    // held_ is "bytes after HEND": its count grows
+  std::uint64_t end_offset_ = 0;   // where HEND ended
   ChunkDecoder chunks_;
   Error error_{Status::ok, {}};
   bool finished_ = false;

@@ -304,9 +304,6 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     std::vector<std::uint32_t> sorted_ratio(ratio);
     std::sort(sorted_ratio.begin(), sorted_ratio.end());
     for (int classes : {1, 2, 4, 8, 16}) {
-      // Coarser levels are repaired by the decoder; classes, tuned to the
-      // input's edges, would only cost bits there.
-      if (in.approximate && classes > 1) break;
       ReconParams p;
       p.scale_rank = rank;
       p.border = border;
@@ -420,7 +417,9 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     for (std::size_t t = 0; t < nt; ++t)
       if (toggled[t]) best.toggles.push_back(static_cast<std::uint32_t>(t));
   }
-  if (kind == Kind::surface && !border.empty() && in.surface && in.surface_points)
+  // Hole caps are judged against the input only where the level follows it;
+  // coarser levels keep the border rule alone.
+  if (kind == Kind::surface && !border.empty() && in.surface && in.surface_points && !in.approximate)
     best.drops = hole_faces(points, dt, best, *in.surface_points, *in.surface);
   if (report) {
     report->mismatches_before_toggles = best_mismatch;

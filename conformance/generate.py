@@ -1,0 +1,1443 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: AGPL-3.0-or-later
+"""Rebuilds the HMC conformance vectors deterministically.
+
+    generate.py --hmc PATH/TO/hmc [--out DIR]     rebuild every case into DIR
+                                                  (default: vectors/ beside this file)
+    generate.py --hmc PATH/TO/hmc --check [--cases DIR]
+                                                  re-encode every case from the input
+                                                  and options recorded in its folder and
+                                                  fail if the bytes differ from stream.hmc
+                                                  while spec/hmc.md's version is unchanged
+
+Every input is made here: by `hmc gen` or by the small writers below (XYZ,
+OFF, MEDIT .mesh). Positive cases are encoded by `hmc enc` with recorded
+options, then optionally edited at the chunk level (spliced VQTB or
+ancillary chunks, truncation); their expected canonical dump is written by
+`hmc dec --canonical`. A few positive cases are built here bit by bit
+(refinement layers with neighbour counts and context classes the encoder
+never picks, hand-written RCON chunks). Negative cases are valid streams
+with exactly one defect, each edit recomputing the CRCs it touches (except
+the CRC cases).
+
+Python 3 standard library only.
+"""
+import argparse
+import heapq
+import itertools
+import json
+import math
+import os
+import random
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
+
+SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
+SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
+
+
+# ---------------------------------------------------------------- bytes, chunks
+
+
+def varint(v):
+    out = bytearray()
+    while True:
+        b = v & 0x7F
+        v >>= 7
+        if v:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)
+
+
+def svarint(v):
+    return varint((v << 1) ^ (v >> 63) if v >= 0 else ((v << 1) ^ -1) & (2**64 - 1))
+
+
+def crc(t, payload):
+    return zlib.crc32(t.encode("ascii") + payload) & 0xFFFFFFFF
+
+
+def chunk_bytes(t, payload, stored_crc=None):
+    c = crc(t, payload) if stored_crc is None else stored_crc
+    return t.encode("ascii") + struct.pack("<I", len(payload)) + payload + struct.pack("<I", c)
+
+
+def split(data):
+    """A valid stream -> (preamble, [[type, payload], ...])."""
+    assert data[:8] == SIG, "not an HMC stream"
+    pos, out = 10, []
+    while pos < len(data):
+        t = data[pos:pos + 4].decode("ascii")
+        n = struct.unpack("<I", data[pos + 4:pos + 8])[0]
+        out.append([t, data[pos + 8:pos + 8 + n]])
+        pos += 12 + n
+    assert pos == len(data)
+    return data[:10], out
+
+
+def join(pre, chunks):
+    return pre + b"".join(chunk_bytes(t, p) for t, p in chunks)
+
+
+def offsets(data):
+    """Byte offset of every chunk of a valid stream, and the end."""
+    pos, out = 10, []
+    while pos < len(data):
+        out.append(pos)
+        pos += 12 + struct.unpack("<I", data[pos + 4:pos + 8])[0]
+    return out + [pos]
+
+
+def apply_edits(data, edits):
+    """Applies recorded edit operations (case.json "edit") to a stream."""
+    for e in edits:
+        op = e["op"]
+        if op in ("insert_chunk", "remove_chunk", "replace_payload", "move_chunk", "copy_chunk", "set_type"):
+            pre, ch = split(data)
+            if op == "insert_chunk":
+                ch.insert(e["at"], [e["type"], bytes.fromhex(e["payload"])])
+            elif op == "remove_chunk":
+                del ch[e["at"]]
+            elif op == "replace_payload":
+                ch[e["at"]][1] = bytes.fromhex(e["payload"])
+            elif op == "move_chunk":
+                c = ch.pop(e["from"])
+                ch.insert(e["to"], c)
+            elif op == "copy_chunk":
+                ch.insert(e["to"], list(ch[e["from"]]))
+            elif op == "set_type":
+                ch[e["at"]][0] = e["type"]
+            data = join(pre, ch)
+        elif op == "truncate":
+            data = data[:e["length"]]
+        elif op == "truncate_in_chunk":  # cut `keep` bytes into chunk `at`
+            data = data[:offsets(data)[e["at"]] + e["keep"]]
+        elif op == "append":
+            data = data + bytes.fromhex(e["hex"])
+        elif op == "patch":  # overwrite bytes, CRCs untouched
+            b = bytearray(data)
+            off = e["offset"] if "offset" in e else offsets(data)[e["chunk"]] + e["chunk_offset"]
+            new = bytes.fromhex(e["hex"])
+            b[off:off + len(new)] = new
+            data = bytes(b)
+        elif op == "xor":  # flip bits of one byte, CRCs untouched
+            b = bytearray(data)
+            off = offsets(data)[e["chunk"]] + e["chunk_offset"]
+            b[off] ^= e["mask"]
+            data = bytes(b)
+        else:
+            raise ValueError("unknown edit " + op)
+    return data
+
+
+# ---------------------------------------------------------------- bit writer, Huffman codes
+
+
+class BitWriter:
+    def __init__(self):
+        self.bits = []
+
+    def put(self, v, n):
+        for i in range(n - 1, -1, -1):
+            self.bits.append((v >> i) & 1)
+
+    def ue(self, v):
+        x = v + 1
+        z = x.bit_length() - 1
+        self.put(0, z)
+        self.put(x, z + 1)
+
+    def bytes(self, pad_bit=0):
+        b = list(self.bits)
+        while len(b) % 8:
+            b.append(pad_bit)
+        return bytes(int("".join(map(str, b[i:i + 8])), 2) for i in range(0, len(b), 8))
+
+
+def huffman_lengths(counts):
+    """Code lengths (<= 15) for symbol counts {symbol: count}, >= 2 symbols."""
+    heap = [(c, s, [s]) for s, c in sorted(counts.items())]
+    heapq.heapify(heap)
+    depth = {s: 0 for s in counts}
+    while len(heap) > 1:
+        c1, k1, g1 = heapq.heappop(heap)
+        c2, k2, g2 = heapq.heappop(heap)
+        for s in g1 + g2:
+            depth[s] += 1
+        heapq.heappush(heap, (c1 + c2, min(k1, k2), g1 + g2))
+    assert max(depth.values()) <= 15
+    return depth
+
+
+def canonical_codes(lengths):
+    """{symbol: length} -> {symbol: (code, length)} as in §7.2."""
+    order = sorted((l, s) for s, l in lengths.items() if l)
+    codes, code, prev = {}, 0, order[0][0]
+    for l, s in order:
+        code <<= l - prev
+        prev = l
+        codes[s] = (code, l)
+        code += 1
+    return codes
+
+
+def write_table(bw, alphabet, lengths=None, single=None):
+    """§7.1. lengths: {symbol: length}; or single: the one symbol."""
+    if single is not None:
+        bw.put(1, 1)
+        bw.put(single, max(1, (alphabet - 1).bit_length()))
+        return
+    bw.put(0, 1)
+    s = 0
+    while s < alphabet:
+        l = lengths.get(s, 0)
+        if l:
+            bw.put(l, 4)
+            s += 1
+        else:
+            run = 0
+            while s + run < alphabet and not lengths.get(s + run, 0):
+                run += 1
+            bw.put(0, 4)
+            bw.ue(run - 1)
+            s += run
+
+
+class Coder:
+    """A code for a list of symbols, written with write_table."""
+
+    def __init__(self, symbols, alphabet):
+        counts = {}
+        for s in symbols:
+            counts[s] = counts.get(s, 0) + 1
+        self.alphabet = alphabet
+        if len(counts) == 1:
+            self.single = next(iter(counts))
+            self.codes = None
+        else:
+            self.single = None
+            self.lengths = huffman_lengths(counts)
+            self.codes = canonical_codes(self.lengths)
+
+    def table(self, bw):
+        if self.single is not None:
+            write_table(bw, self.alphabet, single=self.single)
+        else:
+            write_table(bw, self.alphabet, lengths=self.lengths)
+
+    def put(self, bw, s):
+        if self.codes is not None:
+            c, l = self.codes[s]
+            bw.put(c, l)
+
+
+# ---------------------------------------------------------------- hand-built layers and chunks
+
+
+def morton(p, q):
+    k = 0
+    for b in range(q - 1, -1, -1):
+        k = (k << 3) | (((p[0] >> b) & 1) << 2) | (((p[1] >> b) & 1) << 1) | ((p[2] >> b) & 1)
+    return k
+
+
+def base_payload(points, q):
+    """§8.1 octree coder for a set of grid points."""
+    pts = sorted(set(points), key=lambda p: morton(p, q))
+    nodes = [(0, 0, 0)]
+    syms = []
+    for d in range(q):
+        s = q - d - 1
+        occ_by_node = {}
+        for p in pts:
+            key = (p[0] >> (s + 1), p[1] >> (s + 1), p[2] >> (s + 1))
+            c = (((p[0] >> s) & 1) << 2) | (((p[1] >> s) & 1) << 1) | ((p[2] >> s) & 1)
+            occ_by_node[key] = occ_by_node.get(key, 0) | (1 << c)
+        syms.append([occ_by_node[n] for n in nodes])
+        nodes = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1))
+                 for (X, Y, Z) in nodes for c in range(8) if occ_by_node[(X, Y, Z)] >> c & 1]
+    bw = BitWriter()
+    coders = [Coder(s, 256) for s in syms]
+    for c in coders:
+        c.table(bw)
+    for c, ss in zip(coders, syms):
+        for s in ss:
+            c.put(bw, s)
+    return b"\x00" + bw.bytes()
+
+
+def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False):
+    """§8A.1 conditional octree coder, written from the decoder's ranking
+    (refdec.child_order). coarse: C in canonical order; added: A."""
+    coarse = sorted(coarse)
+    occ = [set() for _ in range(q + 1)]
+    for (x, y, z) in coarse:
+        for d in range(q + 1):
+            occ[d].add((x >> (q - d), y >> (q - d), z >> (q - d)))
+    aocc = [set() for _ in range(q + 1)]
+    for (x, y, z) in added:
+        for d in range(q + 1):
+            aocc[d].add((x >> (q - d), y >> (q - d), z >> (q - d)))
+    nb = refdec.Neighbours(coarse, q)
+    seq = []  # (d, class, symbol)
+
+    def visit(node, d):
+        X, Y, Z = node
+        kids = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1)) for c in range(8)]
+        m = sum(1 << c for c in range(8) if kids[c] in occ[d + 1])
+        j = min(bin(m).count("1"), classes - 1)
+        pi = refdec.child_order(node, d, q, m, coarse, nb, neighbours)
+        rho = sum(1 << r for r in range(8) if kids[pi[r]] in aocc[d + 1])
+        seq.append((d, j, refdec.E.index(rho)))
+        if d < q - 1:
+            for c in range(8):
+                if kids[c] in aocc[d + 1]:
+                    visit(kids[c], d + 1)
+
+    visit((0, 0, 0), 0)
+    bw = BitWriter()
+    bw.put(neighbours, 4)
+    bw.put(classes - 1, 2)
+    coder = {}
+    for j in range(classes):
+        prev = None
+        for d in range(q):
+            syms = [s for (dd, jj, s) in seq if dd == d and jj == j]
+            if syms or force_tables or (prev is None and not share):
+                # a table of its own (flag 1); unused slots get a two-symbol code
+                c = Coder(syms if syms else [0, 1], 255)
+                coder[(d, j)] = c
+                prev = c
+            elif share and prev is not None and d > 0:
+                coder[(d, j)] = None  # marks "inherit" (flag 0)
+            else:
+                coder[(d, j)] = False  # flag 0 at depth 0: none
+    for d in range(q):
+        for j in range(classes):
+            c = coder[(d, j)]
+            if c:
+                bw.put(1, 1)
+                c.table(bw)
+            else:
+                bw.put(0, 1)
+    current = {}
+    for j in range(classes):
+        for d in range(q):
+            if coder[(d, j)]:
+                current[(d, j)] = coder[(d, j)]
+            elif d > 0 and (d - 1, j) in current:
+                current[(d, j)] = current[(d - 1, j)]
+    for (d, j, s) in seq:
+        current[(d, j)].put(bw, s)
+    return b"\x00" + bw.bytes()
+
+
+def head_payload(kind, counts, flags=0):
+    return bytes([kind, flags]) + varint(len(counts)) + b"".join(varint(c) for c in counts)
+
+
+def sqnt_payload(q, origin=(0.0, 0.0, 0.0), step=1.0):
+    return bytes([q]) + struct.pack("<dddd", origin[0], origin[1], origin[2], step)
+
+
+def vqtb_payload(entries, dimension=3):
+    return bytes([dimension]) + varint(len(entries)) + b"".join(svarint(v) for e in entries for v in e)
+
+
+def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, border=(), toggles=(),
+                 drops=(), class_code_bits=None, filters=None, mask=None):
+    """§10. classes: the class of each of the n points (needed when K > 1);
+    filters: {filter number: threshold}."""
+    filters = filters or {}
+    if mask is None:
+        mask = sum(1 << i for i in filters)
+    out = bytes([flags, scale_rank, mask]) + b"".join(varint(filters[i]) for i in sorted(filters))
+    out += varint(len(multipliers)) + b"".join(varint(m) for m in multipliers)
+    if len(multipliers) > 1:
+        if class_code_bits is not None:
+            out += class_code_bits
+        else:
+            bw = BitWriter()
+            c = Coder(classes, len(multipliers))
+            c.table(bw)
+            for s in classes:
+                c.put(bw, s)
+            out += bw.bytes()
+
+    def gaps(lst):
+        b = varint(len(lst))
+        prev = -1
+        for v in lst:
+            b += varint(v - prev - 1)
+            prev = v
+        return b
+
+    return out + gaps(border) + gaps(toggles) + gaps(drops)
+
+
+def describe_rcon(payload, n):
+    """Fields of an RCON for case.json."""
+    r = refdec.ByteReader(payload, "bad_layer", "RCON")
+    flags, k, mask = r.u8(), r.u8(), r.u8()
+    filters = {str(i): r.varint() for i in range(6) if mask >> i & 1}
+    K = r.varint()
+    mult = [r.varint() for _ in range(K)]
+    counts = [n] if K == 1 else None
+    if K > 1:
+        br = refdec.BitReader(payload, r.pos, "bad_layer", "RCON")
+        code = refdec.read_code(br, K)
+        counts = [0] * K
+        for _ in range(n):
+            counts[code.decode(br, "bad_layer")] += 1
+        r.pos = br.pad()
+    lists = []
+    for _ in range(3):
+        c = r.varint()
+        for _ in range(c):
+            r.varint()
+        lists.append(c)
+    return {"peel": flags & 1, "repair": flags >> 1 & 1, "scale_rank": k, "filters": filters,
+            "multipliers": mult, "class_members": counts,
+            "border": lists[0], "toggles": lists[1], "drops": lists[2]}
+
+
+def describe_refn(payload):
+    b = payload[1]
+    return {"neighbours": b >> 4, "classes": ((b >> 2) & 3) + 1}
+
+
+def describe(data):
+    """A summary of a valid (possibly cut) stream's chunks for case.json."""
+    out = []
+    pos = 10
+    kind = None
+    counts = []
+    layer = 0
+    while pos + 12 <= len(data):
+        t = data[pos:pos + 4].decode("ascii", "replace")
+        n = struct.unpack("<I", data[pos + 4:pos + 8])[0]
+        if pos + 12 + n > len(data):
+            break
+        p = data[pos + 8:pos + 8 + n]
+        d = {"type": t, "length": n}
+        try:
+            if t == "HEAD":
+                r = refdec.ByteReader(p, "x", "x")
+                kind = r.u8()
+                r.u8()
+                counts = [r.varint() for _ in range(r.varint())]
+            elif t == "SQNT":
+                d["q"] = p[0]
+            elif t in ("BASE", "REFN"):
+                if t == "REFN" and len(p) > 1:
+                    d.update(describe_refn(p))
+                layer += 1
+            elif t == "RCON":
+                d.update(describe_rcon(p, counts[layer - 1]))
+        except Exception:  # a negative case's defect: no description
+            pass
+        out.append(d)
+        pos += 12 + n
+    return out
+
+
+# ---------------------------------------------------------------- inputs
+
+
+def write_xyz(path, pts):
+    with open(path, "w", newline="\n") as f:
+        for p in pts:
+            f.write("%r %r %r\n" % tuple(float(c) for c in p))
+
+
+def write_off(path, pts, tris):
+    with open(path, "w", newline="\n") as f:
+        f.write("OFF\n%d %d 0\n" % (len(pts), len(tris)))
+        for p in pts:
+            f.write("%r %r %r\n" % tuple(float(c) for c in p))
+        for t in tris:
+            f.write("3 %d %d %d\n" % tuple(t))
+
+
+def write_mesh(path, pts, tets):
+    with open(path, "w", newline="\n") as f:
+        f.write("MeshVersionFormatted 1\nDimension 3\nVertices\n%d\n" % len(pts))
+        for p in pts:
+            f.write("%r %r %r 0\n" % tuple(float(c) for c in p))
+        f.write("Tetrahedra\n%d\n" % len(tets))
+        for t in tets:
+            f.write("%d %d %d %d 0\n" % tuple(i + 1 for i in t))
+        f.write("End\n")
+
+
+def kuhn_cube(n, jitter=0.0, seed=0):
+    """An n^3 lattice cut into 6 tetrahedra per cube (a volume mesh)."""
+    rnd = random.Random(seed)
+    pts = [(x + round(jitter * rnd.uniform(-1, 1), 3), y + round(jitter * rnd.uniform(-1, 1), 3), z + round(jitter * rnd.uniform(-1, 1), 3))
+           for x in range(n) for y in range(n) for z in range(n)]
+    idx = {(x, y, z): (x * n + y) * n + z for x in range(n) for y in range(n) for z in range(n)}
+    tets = []
+    for x, y, z in itertools.product(range(n - 1), repeat=3):
+        for perm in itertools.permutations(range(3)):
+            v = [x, y, z]
+            path = [tuple(v)]
+            for a in perm:
+                v[a] += 1
+                path.append(tuple(v))
+            tets.append([idx[p] for p in path])
+    return pts, tets
+
+
+def height_field(n, seed=0):
+    """An open surface: z = f(x, y) on an n x n grid, two triangles a cell."""
+    rnd = random.Random(seed)
+    pts = [(round(x + 0.3 * rnd.uniform(-1, 1), 3), round(y + 0.3 * rnd.uniform(-1, 1), 3),
+            round(2.0 * math.sin(x * 0.7) * math.cos(y * 0.5) + 0.1 * rnd.uniform(-1, 1), 3))
+           for x in range(n) for y in range(n)]
+    tris = []
+    for x in range(n - 1):
+        for y in range(n - 1):
+            a, b, c, d = x * n + y, (x + 1) * n + y, (x + 1) * n + y + 1, x * n + y + 1
+            tris += [(a, b, c), (a, c, d)]
+    return pts, tris
+
+
+def cylinder(rings, per_ring, radius=1.0, height=3.0):
+    """An open tube (two border loops)."""
+    pts = [(round(radius * math.cos(2 * math.pi * j / per_ring), 4), round(radius * math.sin(2 * math.pi * j / per_ring), 4),
+            round(height * i / (rings - 1), 4)) for i in range(rings) for j in range(per_ring)]
+    tris = []
+    for i in range(rings - 1):
+        for j in range(per_ring):
+            a, b = i * per_ring + j, i * per_ring + (j + 1) % per_ring
+            c, d = a + per_ring, b + per_ring
+            tris += [(a, b, d), (a, d, c)]
+    return pts, tris
+
+
+CUBE_PTS = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+CUBE_TRIS = [(0, 2, 1), (0, 3, 2), (4, 5, 6), (4, 6, 7), (0, 1, 5), (0, 5, 4), (1, 2, 6), (1, 6, 5),
+             (2, 3, 7), (2, 7, 6), (3, 0, 4), (3, 4, 7)]
+
+
+def make_input(spec, folder, hmc):
+    """Writes a case's input into folder; returns its file name."""
+    kind = spec[0]
+    if kind == "gen":
+        _, sample, n, seed = spec
+        name = "input.ply"
+        run([hmc, "gen", sample, "--vertices", str(n), "--seed", str(seed), "-o", os.path.join(folder, name)])
+        return name
+    if kind == "xyz":
+        name = "input.xyz"
+        write_xyz(os.path.join(folder, name), spec[1])
+        return name
+    if kind == "off":
+        name = "input.off"
+        write_off(os.path.join(folder, name), spec[1], spec[2])
+        return name
+    if kind == "mesh":
+        name = "input.mesh"
+        write_mesh(os.path.join(folder, name), spec[1], spec[2])
+        return name
+    raise ValueError(kind)
+
+
+def run(cmd, check=True):
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+    if check and r.returncode != 0:
+        raise RuntimeError("%s failed (%d): %s" % (" ".join(cmd), r.returncode, r.stderr))
+    return r
+
+
+# ---------------------------------------------------------------- the cases
+
+rnd = random.Random(20261122)
+LINE = [(i * 0.5, 0.0, 0.0) for i in range(7)]
+PLANE = [(x * 1.0, y * 1.0, 0.0) for x in range(6) for y in range(5)]
+DUPS = [(0.10, 0.20, 0.30), (0.10, 0.20, 0.30), (0.11, 0.20, 0.30), (0.9, 0.1, 0.5), (0.91, 0.1, 0.5),
+        (0.5, 0.9, 0.2), (0.5, 0.9, 0.2), (0.2, 0.4, 0.9), (0.7, 0.7, 0.7), (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)]
+OCTA = [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)]
+TETRA4 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+COPLANAR4 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0)]
+HF = height_field(12, seed=3)
+TUBE = cylinder(6, 16)
+VOL4 = kuhn_cube(4)
+VOL5J = kuhn_cube(5, jitter=0.15, seed=7)
+VOL6J = kuhn_cube(6, jitter=0.2, seed=5)
+
+S = {  # spec sections, by topic
+    "container": ["2", "3"], "head": ["4"], "sqnt": ["5"], "vqtb": ["6"], "huff": ["7"], "base": ["8"],
+    "refn": ["8A"], "end": ["9"], "rcon": ["10"], "recon": ["11", "D"], "out": ["12"], "err": ["13"],
+}
+
+
+def sec(*topics):
+    out = []
+    for t in topics:
+        for s in S[t]:
+            if s not in out:
+                out.append(s)
+    return out
+
+
+P = "points"
+F = "full"
+
+# Positive cases encoded by hmc: name -> (input, args, edits-builder or None, covers, profile)
+# The profile is "points" for kind points (nothing to reconstruct) and "full" otherwise;
+# a "full" case still runs in the points profile, without comparing its .simplices.
+ENCODED = [
+    # kinds, q, levels
+    ("points-ball-q12-l1", ("gen", "ball", 200, 1), ["--bits", "12"], None,
+     "kind points, q = 12, one level (BASE only), info chunk", sec("container", "head", "sqnt", "huff", "base", "end")),
+    ("points-ball-q12-l4", ("gen", "ball", 250, 2), ["--levels", "4"], None,
+     "kind points, four levels: BASE then three REFN, no RCON", sec("head", "base", "refn")),
+    ("points-shells-q12-l3-noinfo", ("gen", "shells", 200, 1), ["--levels", "3", "--no-info"], None,
+     "kind points, three levels, no ancillary chunk at all", sec("container", "refn")),
+    ("points-lattice-q12-l3", ("gen", "lattice", 216, 1), ["--levels", "3"], None,
+     "lattice (equal distances everywhere: neighbour ties broken by canonical index)", sec("refn")),
+    ("points-ball-q1", ("gen", "ball", 100, 3), ["--bits", "1"], None,
+     "q = 1: 100 points merged onto the 8-point grid", sec("sqnt", "base")),
+    ("points-ball-q21-l3", ("gen", "ball", 200, 4), ["--bits", "21", "--levels", "3"], None,
+     "q = 21, the largest grid, three levels", sec("sqnt", "base", "refn")),
+    ("points-ball-q5-l6", ("gen", "ball", 300, 5), ["--bits", "5", "--levels", "6", "--ratio", "0.4"], None,
+     "q = 5, dense grid, six levels", sec("base", "refn")),
+    ("surface-torus-q12-l1", ("gen", "torus", 200, 1), [], None,
+     "kind surface, one level with RCON", sec("rcon", "recon")),
+    ("surface-torus-q12-l4", ("gen", "torus", 300, 1), ["--levels", "4"], None,
+     "kind surface, four levels, one RCON per level", sec("refn", "rcon", "recon")),
+    ("surface-sphere-q1", ("gen", "sphere", 60, 1), ["--bits", "1"], None,
+     "kind surface at q = 1: the 8 cube corners, all cospherical", sec("sqnt", "recon")),
+    ("surface-sphere-q21-l3", ("gen", "sphere", 200, 1), ["--bits", "21", "--levels", "3"], None,
+     "kind surface at q = 21 (extent above 2^16: exact Delaunay beyond TetGen's safe range)", sec("sqnt", "refn", "recon")),
+    ("surface-torus-q8-l8", ("gen", "torus", 300, 1), ["--bits", "8", "--levels", "8", "--ratio", "0.15"], None,
+     "many levels (--levels 8, ratio 0.15) at q = 8", sec("head", "refn", "rcon")),
+    ("volume-ball-q12-l1", ("gen", "ball", 150, 6), ["--kind", "volume"], None,
+     "kind volume, one level", sec("rcon", "recon")),
+    ("volume-ball-q12-l4", ("gen", "ball", 200, 7), ["--kind", "volume", "--levels", "4"], None,
+     "kind volume, four levels", sec("refn", "rcon", "recon")),
+    ("volume-lattice-q12-l3", ("gen", "lattice", 125, 1), ["--kind", "volume", "--levels", "3"], None,
+     "kind volume on a lattice: nearly every tetrahedron decided by the perturbation rule", sec("recon")),
+    ("volume-mesh-q3", ("mesh", VOL4[0], VOL4[1]), ["--bits", "3", "--levels", "2"], None,
+     "a tetrahedral input mesh (MEDIT) on a 4^3 lattice at q = 3", sec("recon")),
+    ("volume-mesh-jitter-q10-l3", ("mesh", VOL5J[0], VOL5J[1]), ["--bits", "10", "--levels", "3"], None,
+     "a jittered 5^3 tetrahedral mesh, three levels", sec("refn", "recon")),
+    ("volume-ball-q21-l2", ("gen", "ball", 150, 8), ["--kind", "volume", "--bits", "21", "--levels", "2"], None,
+     "kind volume at q = 21", sec("sqnt", "recon")),
+    ("volume-ball-q1", ("gen", "ball", 40, 9), ["--kind", "volume", "--bits", "1"], None,
+     "kind volume at q = 1 (the unit cube's six tetrahedra)", sec("recon")),
+    # options
+    ("surface-boundary-constant", ("gen", "torus", 250, 2), ["--levels", "4", "--boundary", "constant"], None,
+     "boundary decimation mode constant", sec("refn", "rcon")),
+    ("surface-boundary-linear", ("gen", "torus", 250, 2), ["--levels", "4", "--boundary", "linear"], None,
+     "boundary decimation mode linear", sec("refn", "rcon")),
+    ("surface-boundary-adaptive", ("gen", "torus", 250, 2), ["--levels", "4", "--boundary", "adaptive"], None,
+     "boundary decimation mode adaptive", sec("refn", "rcon")),
+    ("volume-optimizer-forward", ("mesh", VOL6J[0], VOL6J[1]), ["--bits", "10", "--levels", "3", "--ratio", "0.5", "--optimizer", "forward"], None,
+     "inner optimiser forward", sec("refn", "rcon")),
+    ("volume-optimizer-backward", ("mesh", VOL6J[0], VOL6J[1]), ["--bits", "10", "--levels", "3", "--ratio", "0.5", "--optimizer", "backward"], None,
+     "inner optimiser backward", sec("refn", "rcon")),
+    ("volume-optimizer-greedy", ("mesh", VOL6J[0], VOL6J[1]), ["--bits", "10", "--levels", "3", "--ratio", "0.5", "--optimizer", "greedy"], None,
+     "inner optimiser greedy", sec("refn", "rcon")),
+    ("volume-optimizer-best", ("mesh", VOL6J[0], VOL6J[1]), ["--bits", "10", "--levels", "3", "--ratio", "0.5", "--optimizer", "best"], None,
+     "inner optimiser best", sec("refn", "rcon")),
+    ("surface-fidelity-rule", ("gen", "torus", 250, 1), ["--levels", "3", "--fidelity", "rule"], None,
+     "fidelity rule: RCON without corrections", sec("rcon", "recon")),
+    ("surface-fidelity-shape", ("gen", "torus", 250, 1), ["--levels", "3", "--fidelity", "shape"], None,
+     "fidelity shape", sec("rcon", "recon")),
+    ("surface-fidelity-exact", ("gen", "torus", 250, 1), ["--levels", "3", "--fidelity", "exact"], None,
+     "fidelity exact: toggle lists", sec("rcon", "recon")),
+    ("surface-open-heightfield-exact", ("off", HF[0], HF[1]), ["--levels", "2", "--fidelity", "exact"], None,
+     "open surface (one border loop), fidelity exact: border, toggle and drop lists", sec("rcon", "recon")),
+    ("surface-open-tube-shape", ("off", TUBE[0], TUBE[1]), ["--bits", "10", "--fidelity", "shape"], None,
+     "open tube (two border loops), fidelity shape", sec("rcon", "recon")),
+    ("volume-fidelity-exact", ("mesh", VOL5J[0], VOL5J[1]), ["--bits", "10", "--levels", "2", "--fidelity", "exact"], None,
+     "kind volume, fidelity exact", sec("rcon", "recon")),
+    ("volume-fidelity-rule", ("gen", "ball", 150, 11), ["--kind", "volume", "--levels", "2", "--fidelity", "rule"], None,
+     "kind volume, fidelity rule", sec("rcon", "recon")),
+    ("surface-ratio-05-l5", ("gen", "torus", 300, 3), ["--levels", "5", "--ratio", "0.5"], None,
+     "ratio 0.5 per level, five levels", sec("refn", "rcon")),
+    # degenerate geometry
+    ("points-one", ("xyz", [(0.25, -1.5, 3.0)]), ["--kind", "points"], None,
+     "a single point (extent 0: step 1.0)", sec("sqnt", "base")),
+    ("surface-one-point", ("xyz", [(1.0, 2.0, 3.0)]), ["--kind", "surface"], None,
+     "kind surface with one point: RCON present, nothing to rebuild", sec("rcon", "recon")),
+    ("volume-two-points", ("xyz", [(0.0, 0.0, 0.0), (1.0, 2.0, 3.0)]), ["--kind", "volume", "--bits", "4"], None,
+     "kind volume with two points: empty tetrahedralization", sec("recon")),
+    ("surface-three-points", ("xyz", [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.5)]), ["--kind", "surface", "--bits", "6"], None,
+     "kind surface with three points", sec("recon")),
+    ("surface-four-coplanar", ("xyz", COPLANAR4), ["--kind", "surface", "--bits", "3"], None,
+     "four coplanar (and cocircular) points: empty tetrahedralization", sec("recon")),
+    ("volume-four-points", ("xyz", TETRA4), ["--kind", "volume", "--bits", "3"], None,
+     "four points in general position: one tetrahedron", sec("recon")),
+    ("surface-collinear", ("xyz", LINE), ["--kind", "surface", "--bits", "6", "--levels", "2"], None,
+     "collinear points", sec("recon", "refn")),
+    ("volume-coplanar", ("xyz", PLANE), ["--kind", "volume", "--bits", "5", "--levels", "2"], None,
+     "30 coplanar points (a planar lattice)", sec("recon", "refn")),
+    ("points-duplicates", ("xyz", DUPS), ["--kind", "points", "--bits", "3"], None,
+     "duplicates before and after quantization (merged by the encoder)", sec("sqnt", "base")),
+    ("surface-cube-q2", ("off", CUBE_PTS, CUBE_TRIS), ["--bits", "2"], None,
+     "the cube's 8 cospherical corners as a closed surface", sec("recon")),
+    ("surface-octahedron", ("off", OCTA, [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4), (2, 0, 5), (1, 2, 5), (3, 1, 5), (0, 3, 5)]),
+     ["--bits", "4"], None, "octahedron: six cospherical points", sec("recon")),
+]
+
+
+def first_index(ch, t, nth=0):
+    return [i for i, (tt, _) in enumerate(ch) if tt == t][nth]
+
+
+def vqtb_edit(entries):
+    def f(data):
+        pre, ch = split(data)
+        return [{"op": "insert_chunk", "at": first_index(ch, "SQNT") + 1, "type": "VQTB",
+                 "payload": vqtb_payload(entries).hex()}]
+    return f
+
+
+def ancillary_edit(data):
+    pre, ch = split(data)
+    base = first_index(ch, "BASE")
+    return [
+        {"op": "insert_chunk", "at": len(ch) - 1, "type": "zzEn", "payload": b"before HEND".hex()},
+        {"op": "insert_chunk", "at": base + 1, "type": "xtRa", "payload": bytes(range(40)).hex()},
+        {"op": "insert_chunk", "at": base, "type": "empt", "payload": ""},
+        {"op": "insert_chunk", "at": 1, "type": "aAaA", "payload": b"\xff\x00\xfe".hex()},
+    ]
+
+
+def info_garbage_edit(data):
+    pre, ch = split(data)
+    return [{"op": "replace_payload", "at": first_index(ch, "info"), "payload": b"\xff\xfe=\x00no newline or key\x80".hex()},
+            {"op": "insert_chunk", "at": first_index(ch, "info") + 1, "type": "info", "payload": b"a=b\n".hex()}]
+
+
+def cut_after_layer(layers):
+    """Cut after the `layers`-th level's chunks (its RCON included)."""
+    def f(data):
+        pre, ch = split(data)
+        idx = [i for i, (t, _) in enumerate(ch) if t in ("BASE", "REFN")][layers - 1]
+        if idx + 1 < len(ch) and ch[idx + 1][0] == "RCON":
+            idx += 1
+        return [{"op": "truncate", "length": offsets(data)[idx + 1]}]
+    return f
+
+
+def cut_inside(t, nth, keep):
+    def f(data):
+        pre, ch = split(data)
+        return [{"op": "truncate_in_chunk", "at": first_index(ch, t, nth), "keep": keep}]
+    return f
+
+
+EDITED = [
+    ("vqtb-spliced", ("gen", "torus", 200, 1), ["--levels", "2"], vqtb_edit([(1, 0, 0), (0, -1, 0), (3, -5, 7)]),
+     "a VQTB chunk (3 entries) spliced after SQNT: parsed, validated, unused", sec("vqtb", "container")),
+    ("vqtb-spliced-extremes", ("gen", "ball", 120, 12), ["--bits", "21"],
+     vqtb_edit([(2**21 - 1, -(2**21 - 1), 0)] + [(i, -i, i * i) for i in range(1, 70)]),
+     "a VQTB chunk whose entries reach +-(2^21 - 1), multi-byte size", sec("vqtb")),
+    ("ancillary-unknown", ("gen", "torus", 200, 1), ["--levels", "2"], ancillary_edit,
+     "unknown ancillary chunks (empty, binary) after HEAD, between a layer and its RCON and before HEND", sec("container")),
+    ("info-malformed", ("gen", "ball", 100, 13), [], info_garbage_edit,
+     "info chunks with malformed content, and two of them: never an error", sec("end")),
+    ("truncated-points-after-level2", ("gen", "ball", 250, 2), ["--levels", "4"], cut_after_layer(2),
+     "cut at a chunk boundary after the second level: decodes levels 3 and 2", sec("out")),
+    ("truncated-surface-inside-refn", ("gen", "torus", 300, 1), ["--levels", "4"], cut_inside("REFN", 1, 30),
+     "cut inside the third layer: decodes levels 3 and 2", sec("out")),
+    ("truncated-surface-inside-rcon", ("gen", "torus", 300, 1), ["--levels", "4"], cut_inside("RCON", 1, 13),
+     "cut inside the RCON of level 2: level 2 is incomplete, decodes level 3 only", sec("out", "rcon")),
+    ("truncated-volume-before-rcon", ("gen", "ball", 200, 7), ["--kind", "volume", "--levels", "4"], cut_inside("RCON", 2, 0),
+     "cut between a REFN and its RCON: decodes levels 3 and 2", sec("out", "rcon")),
+    ("truncated-no-hend", ("gen", "ball", 150, 4), ["--levels", "3"], cut_inside("HEND", 0, 0),
+     "every level complete but HEND missing: all levels, with a warning", sec("out")),
+    ("truncated-inside-hend", ("gen", "torus", 150, 1), ["--levels", "2"], cut_inside("HEND", 0, 7),
+     "the stream ends inside HEND's chunk header: all levels, with a warning", sec("out")),
+    ("truncated-inside-header", ("gen", "ball", 250, 2), ["--levels", "4"], cut_inside("REFN", 0, 5),
+     "the stream ends inside a chunk header after the first level", sec("out")),
+]
+
+
+# ---------------------------------------------------------------- hand-built positive cases
+
+
+def lattice_pts(n, step, off=(0, 0, 0)):
+    return [(off[0] + x * step, off[1] + y * step, off[2] + z * step) for x in range(n) for y in range(n) for z in range(n)]
+
+
+def rand_pts(n, q, seed):
+    r = random.Random(seed)
+    s = set()
+    while len(s) < n:
+        s.add((r.randrange(1 << q), r.randrange(1 << q), r.randrange(1 << q)))
+    return sorted(s)
+
+
+def sphere_pts(n, q, seed):
+    r = random.Random(seed)
+    c = (1 << q) / 2.0
+    s = set()
+    while len(s) < n:
+        v = [r.gauss(0, 1) for _ in range(3)]
+        l = math.sqrt(sum(x * x for x in v))
+        s.add(tuple(int(c + (c - 1) * x / l) for x in v))
+    return sorted(s)
+
+
+def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), step=1.0, info=None):
+    """levels: point lists, coarsest first, each containing the previous."""
+    counts = [len(l) for l in levels]
+    ch = [["HEAD", head_payload(kind, counts)], ["SQNT", sqnt_payload(q, origin, step)]]
+    if info:
+        ch.append(["info", info])
+    ch.append(["BASE", base_payload(levels[0], q)])
+    if rcons:
+        ch.append(["RCON", rcons[0]])
+    for i in range(1, len(levels)):
+        added = sorted(set(levels[i]) - set(levels[i - 1]))
+        nb, cl, share = refn_opts[i - 1]
+        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share)])
+        if rcons:
+            ch.append(["RCON", rcons[i]])
+    ch.append(["HEND", b""])
+    return join(SIG + b"\x00\x03", ch)
+
+
+def nested(pts, sizes, seed):
+    r = random.Random(seed)
+    order = list(pts)
+    r.shuffle(order)
+    return [sorted(order[:k]) for k in sizes]
+
+
+def hb_refn_neighbours():
+    pts = sphere_pts(300, 10, 1)
+    lv = nested(pts, [40, 100, 200, 300], 2)
+    return hand_stream(0, 10, lv, [(0, 1, True), (2, 2, True), (15, 4, True)])
+
+
+def hb_refn_classes():
+    pts = rand_pts(400, 7, 3)
+    lv = nested(pts, [60, 250, 400], 4)
+    return hand_stream(0, 7, lv, [(3, 4, False), (1, 3, True)])
+
+
+def hb_refn_lattice_ties():
+    pts = lattice_pts(6, 3, (2, 2, 2))
+    lv = nested(pts, [27, 120, 216], 5)
+    return hand_stream(0, 5, lv, [(15, 2, True), (8, 1, True)])
+
+
+def hb_rcon_surface():
+    q = 6
+    pts = sphere_pts(120, q, 6)
+    lv = nested(pts, [50, 120], 7)
+    n0, n1 = len(lv[0]), len(lv[1])
+    r = random.Random(8)
+    rc0 = rcon_payload(n0, flags=0, scale_rank=3, multipliers=(300, 700, 2000), filters={0: 900, 2: 40000, 3: 1},
+                       classes=[r.choice((0, 1, 1, 2)) for _ in range(n0)], border=(0, 5, 6, 40), toggles=(1, 2, 30),
+                       drops=(0, 7, 9))
+    rc1 = rcon_payload(n1, flags=3, scale_rank=64, multipliers=(256, 65535), classes=[i % 2 for i in range(n1)],
+                       filters={0: 1200, 1: 20, 2: 65535, 3: 1, 4: 700, 5: 90},
+                       border=tuple(range(0, n1, 3)), toggles=(), drops=(3, 4))
+    return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1], origin=(-1.5, 2.25, 1e-300), step=0.1)
+
+
+def hb_rcon_volume():
+    q = 5
+    pts = rand_pts(150, q, 9)
+    lv = nested(pts, [70, 150], 10)
+    n0, n1 = len(lv[0]), len(lv[1])
+    rc0 = rcon_payload(n0, flags=3, scale_rank=1, multipliers=(400,), toggles=(0, 3, 10, 11, 12), filters={1: 30, 4: 500})
+    rc1 = rcon_payload(n1, flags=0, scale_rank=10, multipliers=tuple(range(100, 100 + 64 * 50, 50)), filters={5: 100},
+                       classes=[(i * 7) % 64 for i in range(n1)], border=(n1 - 1,), toggles=(5,), drops=(1, 2))
+    return hand_stream(2, q, lv, [(1, 2, True)], rcons=[rc0, rc1], origin=(1e6, -1e6, 0.0), step=1.0 / 3.0)
+
+
+def hb_refn_tiny_coarse():
+    pts = rand_pts(40, 6, 13)
+    lv = nested(pts, [2, 5, 40], 14)
+    return hand_stream(0, 6, lv, [(15, 1, True), (9, 4, True)])
+
+
+def hb_refn_q1():
+    lv = [[(0, 1, 1)], [(0, 0, 0), (0, 1, 1), (1, 0, 1)], [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]]
+    return hand_stream(0, 1, lv, [(1, 1, True), (0, 2, True)])
+
+
+HANDBUILT = [
+    ("refn-tiny-coarse", hb_refn_tiny_coarse, P,
+     "hand-built layers whose coarse level has fewer points than `neighbours` (k = |C|)", sec("refn")),
+    ("refn-q1", hb_refn_q1, P,
+     "hand-built layers at q = 1 (one depth; the last layer fills the grid)", sec("refn", "base")),
+    ("refn-neighbours-0-2-15", hb_refn_neighbours, P,
+     "hand-built refinement layers with neighbours = 0, 2 and 15 and 1, 2, 4 context classes", sec("refn", "huff")),
+    ("refn-classes-unshared", hb_refn_classes, P,
+     "hand-built layers: 4 and 3 context classes, a table at every depth (no sharing) and shared tables", sec("refn", "huff")),
+    ("refn-lattice-ties", hb_refn_lattice_ties, P,
+     "hand-built layers on a lattice: many equidistant neighbours and equal keys", sec("refn")),
+    ("rcon-handbuilt-surface", hb_rcon_surface, F,
+     "hand-written RCON: peel and repair off and on, filters 0, 2, 3 then all six, K = 3 and 2 (class bit streams), border, toggle and drop lists; origin and step not the encoder's", sec("rcon", "recon", "sqnt")),
+    ("rcon-handbuilt-volume", hb_rcon_volume, F,
+     "hand-written RCON for a volume: repair, filters 1, 4 and 5, K = 1 and K = 64, scale rank 1 and 10, toggles", sec("rcon", "recon")),
+]
+
+
+# ---------------------------------------------------------------- negative cases
+
+
+def small_points_stream():
+    """A tiny valid stream of kind points: q = 3, two levels."""
+    pts = rand_pts(20, 3, 11)
+    return hand_stream(0, 3, nested(pts, [8, 20], 12), [(4, 1, True)])
+
+
+def bits_payload(fn):
+    bw = BitWriter()
+    fn(bw)
+    return bw.bytes()
+
+
+def base_with_table(table_writer):
+    """A BASE payload, q = 1, whose one table is written by table_writer."""
+    return b"\x00" + bits_payload(table_writer)
+
+
+def stream_q1(base, counts=(1,), kind=0, rcon=None, q=1):
+    ch = [["HEAD", head_payload(kind, list(counts))], ["SQNT", sqnt_payload(q)], ["BASE", base]]
+    if rcon is not None:
+        ch.append(["RCON", rcon])
+    ch.append(["HEND", b""])
+    return join(SIG + b"\x00\x03", ch)
+
+
+def neg_from(src, edits):
+    return ("derived", src, edits)
+
+
+def over_subscribed(bw):
+    write_table(bw, 256, lengths={1: 1, 2: 1, 3: 2})
+
+
+def incomplete(bw):
+    write_table(bw, 256, lengths={1: 1, 2: 2})
+
+
+def run_past(bw):
+    bw.put(0, 1)
+    bw.put(1, 4)      # symbol 0: length 1
+    bw.put(1, 4)      # symbol 1: length 1
+    bw.put(0, 4)
+    bw.ue(254)        # a run of 255 zeros from symbol 2: passes 256
+
+
+def one_length(bw):
+    write_table(bw, 256, lengths={128: 1})
+
+
+def single_too_big(bw):
+    # REFN alphabet is 255: a single symbol 255 (8 bits) is out of range
+    bw.put(1, 1)
+    bw.put(255, 8)
+
+
+def refn_single(sym):
+    """A REFN payload, q = 1, neighbours 0, one class, table at depth 0: a single symbol."""
+    return b"\x00" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(1, 1), bw.put(1, 1), bw.put(sym, 8)))
+
+
+def stream_q1_refn(refn, coarse=((0, 0, 0),), added=1, kind=0):
+    counts = [len(coarse), len(coarse) + added]
+    ch = [["HEAD", head_payload(kind, counts)], ["SQNT", sqnt_payload(1)], ["BASE", base_payload(list(coarse), 1)],
+          ["REFN", refn], ["HEND", b""]]
+    return join(SIG + b"\x00\x03", ch)
+
+
+def surface_one_level(rcon, pts=None, q=4):
+    pts = pts or rand_pts(30, q, 21)
+    ch = [["HEAD", head_payload(1, [len(pts)])], ["SQNT", sqnt_payload(q)], ["BASE", base_payload(pts, q)],
+          ["RCON", rcon], ["HEND", b""]]
+    return join(SIG + b"\x00\x03", ch)
+
+
+def f64(v):
+    return struct.pack("<d", v)
+
+
+NAN = struct.unpack("<d", bytes.fromhex("000000000000f87f"))[0]
+
+# (name, error class, profile, description, sections, builder)
+# builder: ("derived", source case, edits) or a function returning bytes.
+NEGATIVE = [
+    ("neg-bad-magic", "bad_magic", P, "first signature byte 0x88 instead of 0x89", ["2", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "patch", "offset": 0, "hex": "88"}])),
+    ("neg-bad-magic-text", "bad_magic", P, "a signature altered by a text transfer (CR LF -> LF)", ["2", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "truncate", "length": 4}, {"op": "append", "hex": "0a1a0a000301"}])),
+    ("neg-unsupported-version", "unsupported_version", P, "version_major 1", ["2", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "patch", "offset": 8, "hex": "01"}])),
+    ("neg-crc-mismatch-base", "crc_mismatch", P, "one payload bit of BASE flipped, CRC kept", ["2", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "xor", "chunk": 3, "chunk_offset": 8 + 20, "mask": 0x10}])),
+    ("neg-crc-mismatch-ancillary", "crc_mismatch", P, "an unknown ancillary chunk with a wrong CRC (CRCs are checked on every chunk)", ["2", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "insert_chunk", "at": 1, "type": "abcd", "payload": "0102"},
+                                     {"op": "xor", "chunk": 1, "chunk_offset": 8, "mask": 0x01}])),
+    ("neg-crc-mismatch-after-bad-header", "crc_mismatch", P,
+     "a bad HEAD field and a later CRC mismatch: framing errors are found first", ["2", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "replace_payload", "at": 0, "payload": "07"}, {"op": "xor", "chunk": 5, "chunk_offset": 9, "mask": 0x80}])),
+    ("neg-empty", "truncated", P, "an empty stream", ["12", "13"], lambda: b""),
+    ("neg-truncated-preamble", "truncated", P, "the signature only (8 bytes)", ["2", "12", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "truncate", "length": 8}])),
+    ("neg-truncated-in-base", "truncated", P, "cut inside the first level's BASE", ["12", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "truncate_in_chunk", "at": 3, "keep": 100}])),
+    ("neg-truncated-before-first-rcon", "truncated", P,
+     "surface stream cut after BASE, before its RCON: no complete level", ["3", "12", "13"],
+     neg_from("surface-torus-q12-l4", [{"op": "truncate_in_chunk", "at": 4, "keep": 0}])),
+    ("neg-chunk-length-too-big", "bad_chunk", P, "a chunk length of 2^31 (the stream ends right after)", ["2", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "truncate_in_chunk", "at": 4, "keep": 0}, {"op": "append", "hex": "5245464e00000080"}])),
+    ("neg-chunk-length-max", "bad_chunk", P, "a chunk length of 2^32 - 1 in the middle of the stream", ["2", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "patch", "chunk": 4, "chunk_offset": 4, "hex": "ffffffff"}])),
+    ("neg-chunk-type-not-letters", "bad_chunk", P, "chunk type 'RE4N' (a digit)", ["2", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "set_type", "at": 4, "type": "RE4N"}])),
+    ("neg-unknown-critical", "bad_chunk", P, "an unknown critical chunk 'ABCD' with a correct CRC", ["2", "3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "insert_chunk", "at": 2, "type": "ABCD", "payload": "00"}])),
+    ("neg-refn-before-base", "bad_chunk", P, "REFN moved before BASE", ["3", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "move_chunk", "from": 4, "to": 3}])),
+    ("neg-rcon-missing", "bad_chunk", P, "a surface stream whose first RCON was removed", ["3", "13"],
+     neg_from("surface-torus-q12-l4", [{"op": "remove_chunk", "at": 4}])),
+    ("neg-rcon-twice", "bad_chunk", P, "an RCON repeated", ["3", "13"],
+     neg_from("surface-torus-q12-l4", [{"op": "copy_chunk", "from": 4, "to": 5}])),
+    ("neg-rcon-in-points", "bad_chunk", P, "an RCON in a stream of kind points", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "insert_chunk", "at": 4, "type": "RCON", "payload": "010600018008000000"}])),
+    ("neg-two-head", "bad_chunk", P, "HEAD twice", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "copy_chunk", "from": 0, "to": 1}])),
+    ("neg-two-sqnt", "bad_chunk", P, "SQNT twice", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "copy_chunk", "from": 1, "to": 2}])),
+    ("neg-head-not-first", "bad_chunk", P, "an ancillary chunk before HEAD", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "insert_chunk", "at": 0, "type": "abcd", "payload": ""}])),
+    ("neg-base-before-sqnt", "bad_chunk", P, "BASE before SQNT", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "move_chunk", "from": 1, "to": 3}])),
+    ("neg-vqtb-after-base", "bad_chunk", P, "VQTB after BASE", ["3", "13"],
+     neg_from("vqtb-spliced", [{"op": "move_chunk", "from": 2, "to": 5}])),
+    ("neg-sqnt-missing", "bad_chunk", P, "no SQNT", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "remove_chunk", "at": 1}])),
+    ("neg-extra-refn", "bad_chunk", P, "one more REFN than the declared levels", ["3", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "copy_chunk", "from": 6, "to": 7}])),
+    ("neg-hend-early", "bad_chunk", P, "HEND after two of four levels", ["3", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "remove_chunk", "at": 5}, {"op": "remove_chunk", "at": 5}])),
+    ("neg-hend-nonempty", "bad_chunk", P, "HEND with a one-byte payload", ["9", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "replace_payload", "at": 4, "payload": "00"}])),
+    ("neg-trailing-bytes", "bad_chunk", P, "two bytes after HEND", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "append", "hex": "0000"}])),
+    ("neg-trailing-chunk", "bad_chunk", P, "a complete ancillary chunk after HEND", ["3", "13"],
+     neg_from("points-ball-q12-l1", [{"op": "append", "hex": chunk_bytes("abcd", b"").hex()}])),
+    # HEAD / SQNT / VQTB
+    ("neg-head-kind", "bad_header", P, "kind 3", ["4", "13"],
+     lambda: stream_q1(base_payload([(0, 0, 0)], 1), kind=3)),
+    ("neg-head-flags", "bad_header", P, "HEAD flags 1 (reserved)", ["4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "00010101"}])),
+    ("neg-head-levels-0", "bad_header", P, "level_count 0", ["4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "000000"}])),
+    ("neg-head-levels-65", "bad_header", P, "level_count 65", ["4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": (bytes([0, 0, 65]) + bytes(range(1, 66))).hex()}])),
+    ("neg-head-not-increasing", "bad_header", P, "level_points 5, 5", ["4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "0000020505"}])),
+    ("neg-head-zero-points", "bad_header", P, "level_points[0] = 0", ["4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "00000100"}])),
+    ("neg-head-trailing", "bad_header", P, "a byte after the last HEAD field", ["4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "0000010100"}])),
+    ("neg-head-varint-long", "bad_header", P, "a level count in a non-shortest varint (81 00)", ["1", "4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "0000810001"}])),
+    ("neg-grid-overflow", "bad_header", P, "9 points declared at q = 1 (the grid holds 8)", ["4", "13"],
+     lambda: stream_q1(base_payload([(0, 0, 0)], 1), counts=(9,))),
+    ("neg-sqnt-q0", "bad_header", P, "q = 0", ["5", "13"],
+     lambda: stream_q1(base_payload([(0, 0, 0)], 1), q=0)),
+    ("neg-sqnt-q22", "bad_header", P, "q = 22", ["5", "13"],
+     None),
+    ("neg-sqnt-step-nan", "bad_header", P, "step NaN", ["5", "13"], None),
+    ("neg-sqnt-step-inf", "bad_header", P, "step +infinity", ["5", "13"], None),
+    ("neg-sqnt-step-zero", "bad_header", P, "step 0", ["5", "13"], None),
+    ("neg-sqnt-step-negative", "bad_header", P, "step -1", ["5", "13"], None),
+    ("neg-sqnt-origin-inf", "bad_header", P, "origin y = -infinity", ["5", "13"], None),
+    ("neg-sqnt-short", "bad_header", P, "SQNT payload of 32 bytes", ["5", "13"], None),
+    ("neg-vqtb-dimension", "bad_header", P, "VQTB dimension 2", ["6", "13"], None),
+    ("neg-vqtb-size-0", "bad_header", P, "VQTB size 0", ["6", "13"], None),
+    ("neg-vqtb-entry-range", "bad_header", P, "a VQTB entry of 2^21", ["6", "13"], None),
+    ("neg-vqtb-trailing", "bad_header", P, "a byte after the last VQTB entry", ["6", "13"], None),
+    # Huffman tables
+    ("neg-huffman-oversubscribed", "bad_huffman_table", P, "BASE table with lengths 1, 1, 2", ["7.1", "13"],
+     lambda: stream_q1(base_with_table(over_subscribed))),
+    ("neg-huffman-incomplete", "bad_huffman_table", P, "BASE table with lengths 1, 2 (Kraft sum 3/4)", ["7.1", "13"],
+     lambda: stream_q1(base_with_table(incomplete))),
+    ("neg-huffman-run-past-alphabet", "bad_huffman_table", P, "a zero run of 255 from symbol 2 of 256", ["7.1", "13"],
+     lambda: stream_q1(base_with_table(run_past))),
+    ("neg-huffman-one-length", "bad_huffman_table", P, "one non-zero length in the multi-symbol form", ["7.1", "13"],
+     lambda: stream_q1(base_with_table(one_length))),
+    ("neg-huffman-single-out-of-range", "bad_huffman_table", P, "REFN single-symbol table with symbol 255 of 255", ["7.1", "8A", "13"],
+     lambda: stream_q1_refn(refn_single(255))),
+    ("neg-huffman-rcon-classes", "bad_huffman_table", P, "RCON class table (K = 2) with one symbol of length 1 only", ["7.1", "10", "13"], None),
+    # layers
+    ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
+    ("neg-base-coder", "bad_layer", P, "BASE coder 1", ["8", "13"],
+     lambda: stream_q1(b"\x01" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-zero-occupancy", "bad_layer", P, "occupancy 0 (single-symbol table)", ["8.1", "13"],
+     lambda: stream_q1(b"\x00" + bits_payload(lambda bw: write_table(bw, 256, single=0)))),
+    ("neg-base-count-mismatch", "bad_layer", P, "BASE codes 2 points, HEAD declares 3", ["8.1", "13"],
+     lambda: stream_q1(base_payload([(0, 0, 0), (1, 1, 1)], 1), counts=(3,))),
+    ("neg-base-too-many", "bad_layer", P, "BASE codes 3 points, HEAD declares 2", ["8.1", "13"],
+     lambda: stream_q1(base_payload([(0, 0, 0), (1, 1, 1), (1, 0, 1)], 1), counts=(2,))),
+    ("neg-base-padding", "bad_layer", P, "non-zero padding bits", ["1", "8.1", "13"],
+     lambda: stream_q1(b"\x00" + (lambda bw: (write_table(bw, 256, single=1), bw.bytes(pad_bit=1)))(BitWriter())[1])),
+    ("neg-base-trailing", "bad_layer", P, "a byte after the bit stream", ["1", "8.1", "13"],
+     lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
+    ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
+     lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 1", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x01" + refn_single(0)[1:])),
+    ("neg-refn-empty", "bad_layer", P, "empty REFN payload", ["8A", "13"], lambda: stream_q1_refn(b"")),
+    ("neg-refn-no-table", "bad_layer", P, "a node needs a table slot that is none", ["8A.1", "13"],
+     lambda: stream_q1_refn(b"\x00" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1))))),
+    ("neg-refn-coarse-point", "bad_layer", P, "an added point equal to a coarse point", ["8A.1", "13"],
+     lambda: stream_q1_refn(refn_single(0))),
+    ("neg-refn-count", "bad_layer", P, "a REFN adding two points where one is declared", ["8A.1", "13"],
+     lambda: stream_q1_refn(refn_single(8))),
+    # RCON
+    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x04 (a reserved bit)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, flags=4))),
+    ("neg-rcon-filter-mask", "bad_layer", P, "RCON filter_mask bit 6 (reserved)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, filters={0: 300}, mask=0x41))),
+    ("neg-rcon-threshold-0", "bad_layer", P, "a filter threshold of 0", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, filters={1: 0}))),
+    ("neg-rcon-threshold-range", "bad_layer", P, "a filter threshold of 65536", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, filters={2: 65536}))),
+    ("neg-rcon-lone-threshold", "bad_layer", P, "threshold 2 for filter 3 (lone triangle), which must be 1", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, filters={3: 2}))),
+    ("neg-rcon-scale-rank-0", "bad_layer", P, "scale_rank 0", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, scale_rank=0))),
+    ("neg-rcon-scale-rank-65", "bad_layer", P, "scale_rank 65", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, scale_rank=65))),
+    ("neg-rcon-class-count-0", "bad_layer", P, "class_count 0", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, multipliers=()))),
+    ("neg-rcon-multipliers-order", "bad_layer", P, "multipliers 500, 500", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, multipliers=(500, 500), classes=[i % 2 for i in range(30)]))),
+    ("neg-rcon-multiplier-range", "bad_layer", P, "a multiplier of 65536", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, multipliers=(65536,)))),
+    ("neg-rcon-border-index", "bad_layer", P, "a border index equal to N", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, border=(3, 30)))),
+    ("neg-rcon-border-count", "bad_layer", P, "border_count N + 1", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, border=tuple(range(31))))),
+    ("neg-rcon-count-past-payload", "bad_layer", P, "a drop count larger than the bytes left", ["10", "13"], None),
+    ("neg-rcon-trailing", "bad_layer", P, "a byte after the last drop", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30) + b"\x00")),
+    ("neg-rcon-class-padding", "bad_layer", P, "non-zero padding after the class bit stream", ["1", "10", "13"], None),
+    ("neg-rcon-toggle-index-2e32", "bad_layer", P, "a toggle index of 2^32 - 1 (above the bound of section 10, checked without reconstruction)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30)[:-2] + b"\x01" + varint(2**32 - 1) + b"\x00")),
+    ("neg-rcon-drop-gap-2e32", "bad_layer", P, "two drop gaps summing past 2^32 - 1", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30)[:-1] + b"\x02" + varint(2**31) + varint(2**31))),
+    ("neg-huffman-table-overrun", "bad_layer", P, "the bit stream ends inside a code-length table", ["7.1", "8.1", "13"],
+     lambda: stream_q1(b"\x00" + bits_payload(lambda bw: (bw.put(0, 1), bw.put(3, 4))))),
+    ("neg-huffman-ue-prefix", "bad_layer", P, "an exp-Golomb zero run with 32 leading zeros", ["1", "7.1", "13"],
+     lambda: stream_q1(b"\x00" + bits_payload(lambda bw: (bw.put(0, 1), bw.put(1, 4), bw.put(1, 4), bw.put(0, 4), bw.put(0, 32), bw.put(1, 1), bw.put(0, 32))))),
+    ("neg-truncated-preamble-9", "truncated", P, "9 bytes: the signature and a version_major of 1; a cut preamble's version is not examined", ["2", "12", "13"],
+     lambda: SIG + b"\x01"),
+    ("neg-framing-first", "bad_chunk", P, "a bad HEAD and a byte after HEND: framing errors are found first", ["2", "13"],
+     neg_from("points-ball-q12-l4", [{"op": "replace_payload", "at": 0, "payload": "07"}, {"op": "append", "hex": "00"}])),
+    ("neg-rcon-vs-layer-order", "bad_chunk", P, "RCON before the level's layer chunk", ["3", "13"],
+     lambda: join(SIG + b"\x00\x03", [["HEAD", head_payload(1, [1])], ["SQNT", sqnt_payload(1)], ["RCON", rcon_payload(1)],
+                                      ["BASE", base_payload([(0, 0, 0)], 1)], ["HEND", b""]])),
+    ("neg-rcon-toggle-range", "bad_layer", F, "a toggle index equal to the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
+    ("neg-rcon-drop-range", "bad_layer", F, "a drop index equal to four times the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
+]
+
+
+def sqnt_bytes(q=1, origin=(0.0, 0.0, 0.0), step=1.0, extra=b""):
+    return (bytes([q]) + f64(origin[0]) + f64(origin[1]) + f64(origin[2]) + f64(step) + extra)[:33 + len(extra)]
+
+
+def stream_with_sqnt(sq):
+    ch = [["HEAD", head_payload(0, [1])], ["SQNT", sq], ["BASE", base_payload([(0, 0, 0)], 1)], ["HEND", b""]]
+    return join(SIG + b"\x00\x03", ch)
+
+
+def stream_with_vqtb(vq):
+    ch = [["HEAD", head_payload(0, [1])], ["SQNT", sqnt_payload(1)], ["VQTB", vq], ["BASE", base_payload([(0, 0, 0)], 1)],
+          ["HEND", b""]]
+    return join(SIG + b"\x00\x03", ch)
+
+
+# Builders that need the helpers above.
+LATE = {
+    "neg-sqnt-q22": lambda: stream_with_sqnt(sqnt_bytes(q=22)),
+    "neg-sqnt-step-nan": lambda: stream_with_sqnt(sqnt_bytes(step=NAN)),
+    "neg-sqnt-step-inf": lambda: stream_with_sqnt(sqnt_bytes(step=math.inf)),
+    "neg-sqnt-step-zero": lambda: stream_with_sqnt(sqnt_bytes(step=0.0)),
+    "neg-sqnt-step-negative": lambda: stream_with_sqnt(sqnt_bytes(step=-1.0)),
+    "neg-sqnt-origin-inf": lambda: stream_with_sqnt(sqnt_bytes(origin=(0.0, -math.inf, 0.0))),
+    "neg-sqnt-short": lambda: stream_with_sqnt(sqnt_bytes()[:32]),
+    "neg-vqtb-dimension": lambda: stream_with_vqtb(vqtb_payload([(1, 2)], dimension=2)),
+    "neg-vqtb-size-0": lambda: stream_with_vqtb(vqtb_payload([])),
+    "neg-vqtb-entry-range": lambda: stream_with_vqtb(vqtb_payload([(0, 2**21, 0)])),
+    "neg-vqtb-trailing": lambda: stream_with_vqtb(vqtb_payload([(0, 1, 0)]) + b"\x00"),
+    "neg-huffman-rcon-classes": lambda: surface_one_level(rcon_payload(
+        30, multipliers=(300, 600), class_code_bits=bits_payload(lambda bw: (bw.put(0, 1), bw.put(1, 4), bw.put(0, 4), bw.ue(0)))))
+    ,
+    "neg-rcon-count-past-payload": lambda: surface_one_level(rcon_payload(30)[:-1] + b"\x05\x00\x00"),
+    "neg-rcon-class-padding": lambda: surface_one_level(rcon_payload(
+        30, multipliers=(300, 600), class_code_bits=(lambda bw: (write_table(bw, 2, single=1), bw.bytes(pad_bit=1)))(BitWriter())[1])),
+}
+
+
+def toggle_range_stream(drops=False):
+    """A surface on the 8 corners of the unit cube, whose tetrahedralization
+    has 6 tetrahedra (delaunay.md §3.3): toggle 6 or drop 24 is out of range."""
+    pts = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+    if drops:
+        rc = rcon_payload(8, drops=(24,))
+    else:
+        rc = rcon_payload(8, toggles=(6,))
+    return surface_one_level(rc, pts=pts, q=1)
+
+
+# ---------------------------------------------------------------- build
+
+
+def spec_version_line():
+    with open(SPEC, encoding="utf-8") as f:
+        for line in f:
+            if line.startswith("| Version |"):
+                return line.strip()
+    raise RuntimeError("no version line in spec/hmc.md")
+
+
+def write_json(path, obj):
+    with open(path, "w", newline="\n") as f:
+        json.dump(obj, f, indent=2, sort_keys=False)
+        f.write("\n")
+
+
+def expected_dump(hmc, folder):
+    exp = os.path.join(folder, "expected")
+    if os.path.exists(exp):
+        shutil.rmtree(exp)
+    r = run([hmc, "dec", os.path.join(folder, "stream.hmc"), "--canonical", exp])
+    levels = sorted(int(n[6:-7]) for n in os.listdir(exp) if n.endswith(".points"))
+    return levels, "warning" in r.stderr
+
+
+def build(hmc, out):
+    if os.path.exists(out):
+        shutil.rmtree(out)
+    os.makedirs(out)
+    version = spec_version_line()
+    with open(os.path.join(out, "VERSION"), "w", newline="\n") as f:
+        f.write(version + "\n")
+    streams = {}
+    index = []
+
+    def finish(name, data, meta):
+        folder = os.path.join(out, name)
+        with open(os.path.join(folder, "stream.hmc"), "wb") as f:
+            f.write(data)
+        streams[name] = data
+        if meta["expect"] == "decode":
+            levels, warned = expected_dump(hmc, folder)
+            with open(os.path.join(folder, "expected", "header.json")) as f:
+                meta["levels_declared"] = json.load(f)["levels"]
+            meta["levels_decoded"] = levels
+            meta["truncated"] = not data.endswith(chunk_bytes("HEND", b""))
+            meta["chunks"] = describe(data)
+        write_json(os.path.join(folder, "case.json"), meta)
+        index.append(meta)
+
+    for name, inp, args, edit, covers, sections in ENCODED + EDITED:
+        folder = os.path.join(out, name)
+        os.makedirs(folder)
+        fname = make_input(inp, folder, hmc)
+        tmp = os.path.join(folder, "enc.tmp.hmc")
+        run([hmc, "enc", os.path.join(folder, fname), "-o", tmp] + args)
+        with open(tmp, "rb") as f:
+            data = f.read()
+        os.remove(tmp)
+        edits = edit(data) if edit else []
+        data = apply_edits(data, edits)
+        kind = data[18] if len(data) > 18 else 0
+        meta = {"name": name, "description": covers, "expect": "decode",
+                "profile": "points" if kind == 0 else "full", "sections": sections,
+                "encoder": {"input": fname, "args": args}, "edit": edits}
+        finish(name, data, meta)
+    for name, fn, profile, covers, sections in HANDBUILT:
+        os.makedirs(os.path.join(out, name))
+        meta = {"name": name, "description": covers, "expect": "decode", "profile": profile,
+                "sections": sections, "built_by": "generate.py " + fn.__name__}
+        finish(name, fn(), meta)
+    for name, cls, profile, covers, sections, builder in NEGATIVE:
+        os.makedirs(os.path.join(out, name))
+        meta = {"name": name, "description": covers, "expect": "error", "error_class": cls, "profile": profile,
+                "sections": sections}
+        if builder is None and name in LATE:
+            builder = LATE[name]
+        if name == "neg-rcon-toggle-range":
+            data = toggle_range_stream()
+            meta["built_by"] = "generate.py toggle_range_stream"
+        elif name == "neg-rcon-drop-range":
+            data = toggle_range_stream(drops=True)
+            meta["built_by"] = "generate.py toggle_range_stream"
+        elif isinstance(builder, tuple):
+            _, src, edits = builder
+            data = apply_edits(streams[src], edits)
+            meta["derived_from"] = src
+            meta["edit"] = edits
+        else:
+            data = builder()
+            meta["built_by"] = "generate.py"
+        folder = os.path.join(out, name)
+        with open(os.path.join(folder, "stream.hmc"), "wb") as f:
+            f.write(data)
+        r = run([hmc, "dec", os.path.join(folder, "stream.hmc"), "--canonical", os.path.join(tempfile.gettempdir(), "hmc-conf-neg")], check=False)
+        shutil.rmtree(os.path.join(tempfile.gettempdir(), "hmc-conf-neg"), ignore_errors=True)
+        if r.returncode == 0 or cls not in r.stderr:
+            print("warning: %s: hmc exits %d: %s" % (name, r.returncode, r.stderr.strip()), file=sys.stderr)
+        write_json(os.path.join(folder, "case.json"), meta)
+        index.append(meta)
+    return index
+
+
+README_HEAD = """# HMC conformance suite
+
+Vectors, a runner and a second decoder that let any HMC decoder check
+itself bit for bit against the specification (`spec/hmc.md`, version in
+`vectors/VERSION`). The rules (what a decoder outputs, the canonical dump,
+profiles, the negative-case convention, versioning) are in
+`spec/conformance.md`.
+
+| path | what |
+|---|---|
+| `vectors/<case>/` | `stream.hmc`, `case.json`, `expected/` (the canonical dump of every decoded level, positive cases), the encoder's input (cases made by `hmc enc`) |
+| `run.py` | the runner: `run.py --decoder 'CMD {in} {outdir}' [--profile points\\|full] [--cases DIR]` |
+| `refdec.py` | a second decoder written from the spec alone (Python, points profile): `refdec.py IN.hmc OUTDIR` |
+| `generate.py` | rebuilds every vector deterministically: `generate.py --hmc build/bin/hmc`; `--check` re-encodes every case and reports drift |
+
+Python 3's standard library is all the scripts need.
+
+```sh
+python3 conformance/run.py --decoder 'build/bin/hmc dec {in} --canonical {outdir}'                  # full profile
+python3 conformance/run.py --decoder 'python3 conformance/refdec.py {in} {outdir}' --profile points  # points profile
+python3 conformance/generate.py --hmc build/bin/hmc                                                 # regenerate (after a spec version change)
+```
+
+CTest runs `conformance_hmc` (the reference decoder, full profile),
+`conformance_refdec` (refdec.py, points profile) and `conformance_drift`
+(re-encoding every case; fails if the bytes changed while the spec's
+version line did not).
+
+A negative case passes when the decoder exits with a non-zero status (not
+by a signal) and names the expected error class as a whole word on
+standard error. Negative cases of profile `full` need reconstruction to
+detect and are skipped in the `points` profile; positive cases of profile
+`full` are run in the `points` profile without comparing `.simplices`.
+
+This file's tables are written by `generate.py`.
+"""
+
+
+def write_readme(path, index):
+    def cell(t):
+        return t.replace("|", "\\|")
+
+    lines = [README_HEAD, "## Positive cases (%d)\n" % sum(1 for m in index if m["expect"] == "decode"),
+             "| case | covers | profile | levels decoded | spec sections |", "|---|---|---|---|---|"]
+    for m in index:
+        if m["expect"] == "decode":
+            lv = "%d of %d%s" % (len(m["levels_decoded"]), m["levels_declared"], ", cut" if m["truncated"] else "")
+            lines.append("| `%s` | %s | %s | %s | %s |" % (m["name"], cell(m["description"]), m["profile"], lv, ", ".join(m["sections"])))
+    lines += ["", "## Negative cases (%d)\n" % sum(1 for m in index if m["expect"] == "error"),
+              "| case | defect | error class | profile | spec sections |", "|---|---|---|---|---|"]
+    for m in index:
+        if m["expect"] == "error":
+            lines.append("| `%s` | %s | `%s` | %s | %s |" % (m["name"], cell(m["description"]), m["error_class"], m["profile"],
+                                                             ", ".join(m["sections"])))
+    with open(path, "w", newline="\n") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def check(hmc, cases):
+    """Re-encodes every case recorded with encoder options (and re-derives
+    every negative case from its source) and compares the bytes."""
+    with open(os.path.join(cases, "VERSION")) as f:
+        recorded = f.read().strip()
+    current = spec_version_line()
+    drift = []
+    n = 0
+    tmpdir = tempfile.mkdtemp(prefix="hmc-conf-check-")
+    try:
+        names = sorted(d for d in os.listdir(cases) if os.path.isfile(os.path.join(cases, d, "case.json")))
+        metas = {}
+        for name in names:
+            with open(os.path.join(cases, name, "case.json")) as f:
+                metas[name] = json.load(f)
+        for name in names:
+            meta = metas[name]
+            folder = os.path.join(cases, name)
+            with open(os.path.join(folder, "stream.hmc"), "rb") as f:
+                committed = f.read()
+            if "encoder" in meta:
+                tmp = os.path.join(tmpdir, name + ".hmc")
+                r = run([hmc, "enc", os.path.join(folder, meta["encoder"]["input"]), "-o", tmp] + meta["encoder"]["args"], check=False)
+                if r.returncode != 0:
+                    drift.append("%s: hmc enc failed: %s" % (name, r.stderr.strip()))
+                    continue
+                with open(tmp, "rb") as f:
+                    data = apply_edits(f.read(), meta.get("edit", []))
+            elif "derived_from" in meta:
+                with open(os.path.join(cases, meta["derived_from"], "stream.hmc"), "rb") as f:
+                    data = apply_edits(f.read(), meta["edit"])
+            else:
+                continue
+            n += 1
+            if data != committed:
+                drift.append("%s: %d bytes re-encoded, %d committed, first difference at byte %d" % (
+                    name, len(data), len(committed),
+                    next((i for i, (a, b) in enumerate(zip(data, committed)) if a != b), min(len(data), len(committed)))))
+    finally:
+        shutil.rmtree(tmpdir, ignore_errors=True)
+    for d in drift:
+        print("DRIFT " + d)
+    if drift and recorded == current:
+        print("%d of %d re-encoded streams differ from the committed vectors while spec/hmc.md's version is unchanged "
+              "(%s): the encoder changed the bitstream without a spec version change. Bump the spec version, or "
+              "regenerate the vectors with conformance/generate.py if the change is intended and conforming." % (
+                  len(drift), n, current))
+        return 1
+    if drift:
+        print("spec version changed (%s -> %s): %d drifting streams accepted; regenerate the vectors." % (recorded, current, len(drift)))
+    print("%d passed, %d failed" % (n - len(drift) if recorded == current else n, len(drift) if recorded == current else 0))
+    return 0
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--hmc", required=True, help="path to the hmc command line")
+    ap.add_argument("--out", default=os.path.join(HERE, "vectors"))
+    ap.add_argument("--cases", default=None, help="with --check: the vectors folder")
+    ap.add_argument("--check", action="store_true")
+    a = ap.parse_args()
+    if a.check:
+        return check(a.hmc, a.cases or a.out)
+    index = build(a.hmc, a.out)
+    write_readme(os.path.join(os.path.dirname(os.path.abspath(a.out)), "README.md"), index)
+    pos = sum(1 for m in index if m["expect"] == "decode")
+    print("%d cases (%d positive, %d negative) in %s" % (len(index), pos, len(index) - pos, a.out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,708 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: AGPL-3.0-or-later
+"""refdec: a second, independent HMC decoder, written from spec/hmc.md alone.
+
+It decodes the points of every level and parses and validates all side
+information (HEAD, SQNT, VQTB, BASE, REFN, RCON), but does not build the
+Delaunay tetrahedralization or reconstruct triangles and tetrahedra: it
+writes the "points" profile of the canonical dump (spec/conformance.md),
+header.json and level-K.points.
+
+    refdec.py IN.hmc OUTDIR
+
+Exit status 0 on success (a truncated stream that still decodes prints a
+warning), 3 on an invalid stream, with "refdec: IN: <error_class>: <message>"
+on stderr, 1 on a bad command line, 4 if the output cannot be written.
+Python 3 standard library only; slow but readable. Section numbers (§) refer
+to spec/hmc.md.
+"""
+import heapq
+import math
+import os
+import struct
+import sys
+import zlib
+
+SIGNATURE = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
+KIND_NAMES = {0: "points", 1: "surface", 2: "volume"}
+MAX_LEN = 2**31 - 1
+INDEX_BOUND = 2**32 - 1  # §10: every RCON index is below 2^32 - 1
+
+
+class DecodeError(Exception):
+    def __init__(self, cls, msg):
+        super().__init__(msg)
+        self.cls = cls
+        self.msg = msg
+
+
+# ---------------------------------------------------------------- §1 bytes
+
+
+class ByteReader:
+    """Fixed-width little-endian fields and varints over one payload; every
+    overrun or malformed varint is an error of class `cls` (§1)."""
+
+    def __init__(self, data, cls, what):
+        self.data = data
+        self.pos = 0
+        self.cls = cls
+        self.what = what
+
+    def fail(self, msg):
+        raise DecodeError(self.cls, "%s: %s" % (self.what, msg))
+
+    def left(self):
+        return len(self.data) - self.pos
+
+    def take(self, n):
+        if self.left() < n:
+            self.fail("payload too short")
+        b = self.data[self.pos:self.pos + n]
+        self.pos += n
+        return b
+
+    def u8(self):
+        return self.take(1)[0]
+
+    def f64(self):
+        return struct.unpack("<d", self.take(8))[0]
+
+    def varint(self):
+        value = 0
+        for i in range(10):
+            if self.left() < 1:
+                self.fail("varint runs past the payload")
+            b = self.data[self.pos]
+            self.pos += 1
+            if i == 9 and b > 1:
+                self.fail("varint above 2^64 - 1")
+            value |= (b & 0x7F) << (7 * i)
+            if not b & 0x80:
+                if b == 0 and i > 0:
+                    self.fail("varint not in shortest form")
+                return value
+        self.fail("varint longer than 10 bytes")
+
+    def svarint(self):
+        u = self.varint()
+        return (u >> 1) ^ -(u & 1)
+
+    def end(self):
+        if self.left():
+            self.fail("%d byte(s) left over" % self.left())
+
+
+# ---------------------------------------------------------------- bit streams (§1)
+
+
+class BitReader:
+    def __init__(self, data, start, cls, what):
+        self.data = data
+        self.pos = start * 8  # in bits
+        self.cls = cls
+        self.what = what
+
+    def bit(self):
+        p = self.pos
+        if (p >> 3) >= len(self.data):
+            raise DecodeError(self.cls, "%s: bit stream runs past the payload" % self.what)
+        self.pos = p + 1
+        return (self.data[p >> 3] >> (7 - (p & 7))) & 1
+
+    def bits(self, n):
+        v = 0
+        for _ in range(n):
+            v = (v << 1) | self.bit()
+        return v
+
+    def ue(self):
+        z = 0
+        while self.bit() == 0:
+            z += 1
+            if z > 31:
+                raise DecodeError(self.cls, "%s: exp-Golomb code with more than 31 leading zeros" % self.what)
+        return (1 << z) + self.bits(z) - 1
+
+    def pad(self):
+        """Skips the padding to the next byte boundary, which must be zero;
+        returns the byte offset after it."""
+        while self.pos & 7:
+            if self.bit():
+                raise DecodeError(self.cls, "%s: non-zero padding bits" % self.what)
+        return self.pos >> 3
+
+    def finish(self):
+        end = self.pad()
+        if end != len(self.data):
+            raise DecodeError(self.cls, "%s: %d byte(s) after the bit stream" % (self.what, len(self.data) - end))
+
+
+# ---------------------------------------------------------------- §7 Huffman
+
+
+class Code:
+    """A canonical prefix code (§7.2) or a one-symbol code."""
+
+    def __init__(self, single=None, lengths=None):
+        self.single = single
+        if lengths is None:
+            return
+        # DEFLATE-style tables: per length, the first code and the symbols.
+        self.count = [0] * 16
+        for l in lengths:
+            if l:
+                self.count[l] += 1
+        self.symbols = [s for l in range(1, 16) for s, ls in enumerate(lengths) if ls == l]
+        self.first = [0] * 16
+        self.index = [0] * 16
+        code = 0
+        idx = 0
+        for l in range(1, 16):
+            code <<= 1
+            self.first[l] = code
+            self.index[l] = idx
+            code += self.count[l]
+            idx += self.count[l]
+
+    def decode(self, br, cls):
+        if self.single is not None:
+            return self.single
+        code = 0
+        for l in range(1, 16):
+            code = (code << 1) | br.bit()  # overrun raises br's class (bad_layer)
+            off = code - self.first[l]
+            if 0 <= off < self.count[l]:
+                return self.symbols[self.index[l] + off]
+        raise DecodeError(cls, "no code matches (impossible for a complete code)")
+
+
+def read_code(br, alphabet):
+    """§7.1: a code-length table for an alphabet of `alphabet` symbols. An
+    overrun is an error of the bit stream's class; every other defect is
+    bad_huffman_table."""
+    if br.bits(1) == 1:
+        w = max(1, (alphabet - 1).bit_length())
+        sym = br.bits(w)
+        if sym >= alphabet:
+            raise DecodeError("bad_huffman_table", "single symbol %d >= alphabet size %d" % (sym, alphabet))
+        return Code(single=sym)
+    lengths = [0] * alphabet
+    s = 0
+    while s < alphabet:
+        v = br.bits(4)
+        if v:
+            lengths[s] = v
+            s += 1
+        else:
+            run = br.ue() + 1
+            if s + run > alphabet:
+                raise DecodeError("bad_huffman_table", "zero run past the alphabet (%d + %d > %d)" % (s, run, alphabet))
+            s += run
+    nonzero = sum(1 for l in lengths if l)
+    if nonzero < 2:
+        raise DecodeError("bad_huffman_table", "fewer than two non-zero code lengths")
+    kraft = sum(1 << (15 - l) for l in lengths if l)
+    if kraft != 1 << 15:
+        raise DecodeError("bad_huffman_table",
+                          "code %s (Kraft sum %d / 32768)" % ("over-subscribed" if kraft > 1 << 15 else "incomplete", kraft))
+    return Code(lengths=lengths)
+
+
+# ---------------------------------------------------------------- §8 base layer
+
+
+def morton_children(node, d, q):
+    """Children of node (X, Y, Z) at depth d: (c, child) for c = 0..7."""
+    X, Y, Z = node
+    return [(c, (2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1))) for c in range(8)]
+
+
+def decode_base(payload, q, n):
+    if not payload:
+        raise DecodeError("bad_layer", "BASE: empty payload")
+    if payload[0] != 0:
+        raise DecodeError("bad_layer", "BASE: unknown coder %d" % payload[0])
+    br = BitReader(payload, 1, "bad_layer", "BASE")
+    tables = [read_code(br, 256) for _ in range(q)]
+    nodes = [(0, 0, 0)]
+    for d in range(q):
+        nxt = []
+        t = tables[d]
+        for (X, Y, Z) in nodes:
+            occ = t.decode(br, "bad_layer")
+            if occ == 0:
+                raise DecodeError("bad_layer", "BASE: zero occupancy at depth %d" % d)
+            for c in range(8):
+                if occ >> c & 1:
+                    if len(nxt) >= n:
+                        raise DecodeError("bad_layer", "BASE: more than %d nodes at depth %d" % (n, d + 1))
+                    nxt.append((2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1)))
+        nodes = nxt
+    br.finish()
+    if len(nodes) != n:
+        raise DecodeError("bad_layer", "BASE: %d points, the header declares %d" % (len(nodes), n))
+    return sorted(nodes)
+
+
+# ---------------------------------------------------------------- §8A refinement layer
+
+# E: 1..255 by number of one bits, then value.
+E = sorted(range(1, 256), key=lambda v: (bin(v).count("1"), v))
+
+
+def reduce_bits(values, b):
+    l = max(abs(v) for v in values).bit_length()
+    s = max(0, l - b)
+    if s == 0:
+        return list(values)
+    return [(abs(v) >> s) * (1 if v >= 0 else -1) for v in values]
+
+
+class Neighbours:
+    """Exact k nearest points of C (doubled coordinates) to a query point,
+    ties to the smaller canonical index, by a uniform grid searched in
+    rings of cells."""
+
+    def __init__(self, pts, q):
+        self.pts = [(2 * x, 2 * y, 2 * z) for (x, y, z) in pts]
+        n = len(pts)
+        # The smallest cell (a power of two in grid units) with about three
+        # points per occupied cell; the result does not depend on it.
+        shift = q
+        for s in range(0, q + 1):
+            cells = {(x >> s, y >> s, z >> s) for (x, y, z) in pts}
+            if n >= 3 * len(cells) or s == q:
+                shift = s
+                break
+        self.side = 2 << shift  # in doubled units
+        self.cells = {}
+        for i, (x, y, z) in enumerate(pts):
+            self.cells.setdefault((x >> shift, y >> shift, z >> shift), []).append(i)
+        self.maxcell = (1 << q) >> shift
+
+    def nearest(self, o, k):
+        if k == 0:
+            return []
+        pts = self.pts
+        if k >= len(pts):
+            idx = range(len(pts))
+            return sorted(idx, key=lambda i: (sq(pts[i], o), i))
+        side = self.side
+        cx, cy, cz = o[0] // side, o[1] // side, o[2] // side
+        cand = []
+        reach = max(cx, cy, cz, self.maxcell - cx, self.maxcell - cy, self.maxcell - cz) + 1
+        r = 0
+        while True:
+            for key in ring(cx, cy, cz, r):
+                lst = self.cells.get(key)
+                if lst:
+                    for i in lst:
+                        p = pts[i]
+                        dx = p[0] - o[0]
+                        dy = p[1] - o[1]
+                        dz = p[2] - o[2]
+                        cand.append((dx * dx + dy * dy + dz * dz, i))
+            if len(cand) >= k:
+                best = heapq.nsmallest(k, cand)
+                # Any point not yet seen is at least r * side away.
+                if best[-1][0] < (r * side) ** 2 or r > reach:
+                    return [i for _, i in best]
+            elif r > reach:
+                return [i for _, i in sorted(cand)]
+            r += 1
+
+
+def sq(p, o):
+    return (p[0] - o[0]) ** 2 + (p[1] - o[1]) ** 2 + (p[2] - o[2]) ** 2
+
+
+def ring(cx, cy, cz, r):
+    if r == 0:
+        yield (cx, cy, cz)
+        return
+    for dx in range(-r, r + 1):
+        for dy in range(-r, r + 1):
+            if abs(dx) == r or abs(dy) == r:
+                for dz in range(-r, r + 1):
+                    yield (cx + dx, cy + dy, cz + dz)
+            else:
+                yield (cx + dx, cy + dy, cz - r)
+                yield (cx + dx, cy + dy, cz + r)
+
+
+def child_order(node, d, q, m, coarse, nb, neighbours):
+    """§8A.1 ranking: returns pi, pi[r] = child at rank r."""
+    X, Y, Z = node
+    h = 1 << (q - d)
+    O = (2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h)
+    k = min(neighbours, len(coarse))
+    idx = nb.nearest(O, k)
+    P = [nb.pts[i] for i in idx]
+    S = [sum(p[a] for p in P) for a in range(3)]
+
+    def mom(a, b):
+        return k * sum(p[a] * p[b] for p in P) - S[a] * S[b]
+
+    if k > 0:
+        Mxx, Myy, Mzz, Mxy, Mxz, Myz = reduce_bits(
+            [mom(0, 0), mom(1, 1), mom(2, 2), mom(0, 1), mom(0, 2), mom(1, 2)], 31)
+    else:
+        Mxx = Myy = Mzz = Mxy = Mxz = Myz = 0
+    Axx = Myy * Mzz - Myz * Myz
+    Ayy = Mxx * Mzz - Mxz * Mxz
+    Azz = Mxx * Myy - Mxy * Mxy
+    Axy = Mxz * Myz - Mxy * Mzz
+    Axz = Mxy * Myz - Mxz * Myy
+    Ayz = Mxy * Mxz - Mxx * Myz
+    A = [[Axx, Axy, Axz], [Axy, Ayy, Ayz], [Axz, Ayz, Azz]]
+    j = 0
+    for a in (1, 2):
+        if A[a][a] > A[j][j]:
+            j = a
+    n = reduce_bits([A[0][j], A[1][j], A[2][j]], 20)
+    keys = []
+    for c in range(8):
+        bx, by, bz = c >> 2, (c >> 1) & 1, c & 1
+        U = ((2 * X + bx) * h + h // 2, (2 * Y + by) * h + h // 2, (2 * Z + bz) * h + h // 2)
+        V = (k * U[0] - S[0], k * U[1] - S[1], k * U[2] - S[2])
+        t = abs(n[0] * V[0] + n[1] * V[1] + n[2] * V[2])
+        e = V[0] * V[0] + V[1] * V[1] + V[2] * V[2]
+        keys.append((1 - (m >> c & 1), t, e, c))
+    keys.sort()
+    return [key[3] for key in keys]
+
+
+def decode_refn(payload, q, coarse, n):
+    """Returns the added points A (list). coarse: C in canonical order."""
+    if not payload:
+        raise DecodeError("bad_layer", "REFN: empty payload")
+    if payload[0] != 0:
+        raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
+    br = BitReader(payload, 1, "bad_layer", "REFN")
+    neighbours = br.bits(4)
+    classes = br.bits(2) + 1
+    table = [[None] * classes for _ in range(q)]
+    for d in range(q):
+        for j in range(classes):
+            if br.bits(1) == 1:
+                table[d][j] = read_code(br, 255)
+            elif d > 0:
+                table[d][j] = table[d - 1][j]
+    # Occupied nodes of C per depth.
+    occ = [set() for _ in range(q + 1)]
+    for (x, y, z) in coarse:
+        for d in range(q + 1):
+            s = q - d
+            occ[d].add((x >> s, y >> s, z >> s))
+    nb = Neighbours(coarse, q)
+    points = []
+
+    def visit(node, d):
+        X, Y, Z = node
+        kids = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1)) for c in range(8)]
+        m = 0
+        for c in range(8):
+            if kids[c] in occ[d + 1]:
+                m |= 1 << c
+        w = bin(m).count("1")
+        T = table[d][min(w, classes - 1)]
+        if T is None:
+            raise DecodeError("bad_layer", "REFN: depth %d class %d has no table" % (d, min(w, classes - 1)))
+        s = T.decode(br, "bad_layer")
+        rho = E[s]
+        pi = child_order(node, d, q, m, coarse, nb, neighbours)
+        occupied = [0] * 8
+        for r in range(8):
+            if rho >> r & 1:
+                occupied[pi[r]] = 1
+        if d == q - 1:
+            for c in range(8):
+                if occupied[c] and m >> c & 1:
+                    raise DecodeError("bad_layer", "REFN: added point %s is a coarser level's point" % (kids[c],))
+            for c in range(8):
+                if occupied[c]:
+                    if len(points) >= n:
+                        raise DecodeError("bad_layer", "REFN: more than %d added points" % n)
+                    points.append(kids[c])
+        else:
+            for c in range(8):
+                if occupied[c]:
+                    visit(kids[c], d + 1)
+
+    visit((0, 0, 0), 0)
+    br.finish()
+    if len(points) != n:
+        raise DecodeError("bad_layer", "REFN: %d added points, the header declares %d" % (len(points), n))
+    return points
+
+
+# ---------------------------------------------------------------- §10 RCON
+
+
+def parse_rcon(payload, n):
+    r = ByteReader(payload, "bad_layer", "RCON")
+    flags = r.u8()
+    if flags & 0xFC:
+        r.fail("reserved flag bits set (flags = %d)" % flags)
+    k = r.u8()
+    if not 1 <= k <= 64:
+        r.fail("scale_rank %d out of range" % k)
+    mask = r.u8()
+    if mask & 0xC0:
+        r.fail("reserved filter_mask bits set (filter_mask = %d)" % mask)
+    thresholds = {}
+    for i in range(6):
+        if mask >> i & 1:
+            t = r.varint()
+            if not 1 <= t <= 65535:
+                r.fail("threshold %d of filter %d out of range" % (t, i))
+            if i == 3 and t != 1:
+                r.fail("threshold %d of filter 3 (lone triangle) is not 1" % t)
+            thresholds[i] = t
+    K = r.varint()
+    if not 1 <= K <= 64:
+        r.fail("class_count %d out of range" % K)
+    mult = []
+    for _ in range(K):
+        m = r.varint()
+        if not 1 <= m <= 65535:
+            r.fail("multiplier %d out of range" % m)
+        if mult and m <= mult[-1]:
+            r.fail("multipliers not strictly increasing")
+        mult.append(m)
+    if K > 1:
+        br = BitReader(payload, r.pos, "bad_layer", "RCON classes")
+        code = read_code(br, K)
+        counts = [0] * K
+        for _ in range(n):
+            counts[code.decode(br, "bad_layer")] += 1
+        r.pos = br.pad()
+
+    def index_list(what, limit):
+        count = r.varint()
+        if limit is not None and count > limit:
+            r.fail("%s count %d above %d" % (what, count, limit))
+        if count > r.left():
+            r.fail("%s count %d larger than the %d payload bytes left" % (what, count, r.left()))
+        out = []
+        prev = -1
+        for _ in range(count):
+            v = prev + 1 + r.varint()
+            if limit is not None and v >= limit:
+                r.fail("%s index %d >= %d" % (what, v, limit))
+            if v >= INDEX_BOUND:
+                r.fail("%s index %d >= 2^32 - 1" % (what, v))
+            out.append(v)
+            prev = v
+        return out
+
+    index_list("border", n)
+    index_list("toggle", None)  # checked against the tetrahedra only when reconstructing
+    index_list("drop", None)
+    r.end()
+    return {"peel": flags & 1, "repair": flags >> 1 & 1, "scale_rank": k, "filters": thresholds, "multipliers": mult}
+
+
+# ---------------------------------------------------------------- §2, §3, §12 container
+
+
+def frame(data):
+    """§2: splits the stream into chunks, checking every framing rule for
+    the whole stream first. Returns (chunks, cut): chunks = [(type, payload,
+    offset)], cut = True when the data ends before HEND's end."""
+    if data[:8] != SIGNATURE[:len(data[:8])]:
+        raise DecodeError("bad_magic", "not an HMC stream (bad signature)")
+    if len(data) < 10:
+        return [], True  # the version of a cut preamble is not examined (§2)
+    if data[8] != 0:
+        raise DecodeError("unsupported_version", "stream version %d.x, this decoder implements 0.x" % data[8])
+    pos = 10
+    chunks = []
+    while True:
+        if pos == len(data):
+            return chunks, True
+        if len(data) - pos < 8:
+            return chunks, True
+        ctype = data[pos:pos + 4]
+        if not all(65 <= b <= 90 or 97 <= b <= 122 for b in ctype):
+            raise DecodeError("bad_chunk", "chunk type %r at offset %d is not four letters" % (bytes(ctype), pos))
+        length = struct.unpack("<I", data[pos + 4:pos + 8])[0]
+        if length > MAX_LEN:
+            raise DecodeError("bad_chunk", "chunk %s at offset %d: length %d > 2^31 - 1" % (ctype.decode(), pos, length))
+        if len(data) - pos - 8 < length + 4:
+            return chunks, True
+        payload = data[pos + 8:pos + 8 + length]
+        crc = struct.unpack("<I", data[pos + 8 + length:pos + 12 + length])[0]
+        if zlib.crc32(ctype + payload) & 0xFFFFFFFF != crc:
+            raise DecodeError("crc_mismatch", "chunk %s at offset %d: CRC mismatch" % (ctype.decode(), pos))
+        chunks.append((ctype.decode("ascii"), payload, pos))
+        pos += 12 + length
+        if ctype == b"HEND":
+            if pos != len(data):
+                raise DecodeError("bad_chunk", "%d byte(s) after HEND" % (len(data) - pos))
+            return chunks, False
+
+
+def decode(data):
+    chunks, cut = frame(data)
+    st = {"kind": None, "q": None, "origin": None, "step": None, "declared": None}
+    levels = []  # (K, points) complete levels, coarsest first
+    current = None  # points of the last decoded layer
+    pending_rcon = False  # a layer chunk waits for its RCON
+    layers = 0
+    seen = set()
+
+    def need(cond, msg):
+        if not cond:
+            raise DecodeError("bad_chunk", msg)
+
+    for i, (t, payload, off) in enumerate(chunks):
+        if i == 0:
+            need(t == "HEAD", "the first chunk is %s, not HEAD" % t)
+        if t[0].islower():
+            continue  # ancillary: info and unknown ones are skipped
+        if pending_rcon:
+            need(t == "RCON", "%s where the RCON of level %d is due" % (t, st["L"] - layers))
+        if t == "HEAD":
+            need("HEAD" not in seen, "second HEAD")
+            r = ByteReader(payload, "bad_header", "HEAD")
+            kind = r.u8()
+            if kind not in KIND_NAMES:
+                r.fail("kind %d" % kind)
+            if r.u8() != 0:
+                r.fail("reserved flags not 0")
+            L = r.varint()
+            if not 1 <= L <= 64:
+                r.fail("level_count %d" % L)
+            pts = []
+            for _ in range(L):
+                v = r.varint()
+                if (not pts and v < 1) or (pts and v <= pts[-1]):
+                    r.fail("level_points not strictly increasing from 1")
+                pts.append(v)
+            r.end()
+            st.update(kind=kind, declared=pts, L=L)
+        elif t == "SQNT":
+            need("SQNT" not in seen, "second SQNT")
+            need("BASE" not in seen and "VQTB" not in seen, "SQNT after VQTB or BASE")
+            r = ByteReader(payload, "bad_header", "SQNT")
+            if len(payload) != 33:
+                r.fail("payload of %d bytes, not 33" % len(payload))
+            q = r.u8()
+            if not 1 <= q <= 21:
+                r.fail("q = %d out of range" % q)
+            origin = [r.f64() for _ in range(3)]
+            step = r.f64()
+            if not all(math.isfinite(v) for v in origin):
+                r.fail("origin not finite")
+            if not (math.isfinite(step) and step > 0):
+                r.fail("step not finite and positive")
+            if st["declared"][-1] > 1 << (3 * q):
+                r.fail("%d points do not fit a grid of 2^%d points" % (st["declared"][-1], 3 * q))
+            st.update(q=q, origin=origin, step=step)
+        elif t == "VQTB":
+            need("SQNT" in seen, "VQTB before SQNT")
+            need("VQTB" not in seen, "second VQTB")
+            need("BASE" not in seen, "VQTB after BASE")
+            r = ByteReader(payload, "bad_header", "VQTB")
+            if r.u8() != 3:
+                r.fail("dimension not 3")
+            K = r.varint()
+            if not 1 <= K <= 65536:
+                r.fail("size %d out of range" % K)
+            if 3 * K > r.left():
+                r.fail("%d entries cannot fit in %d bytes" % (K, r.left()))
+            for _ in range(3 * K):
+                v = r.svarint()
+                if abs(v) > 2**21 - 1:
+                    r.fail("entry %d out of range" % v)
+            r.end()
+        elif t == "BASE":
+            need("SQNT" in seen, "BASE before SQNT")
+            need("BASE" not in seen, "second BASE")
+            current = decode_base(payload, st["q"], st["declared"][0])
+            layers = 1
+            pending_rcon = st["kind"] != 0
+            if not pending_rcon:
+                levels.append((st["L"] - 1, current))
+        elif t == "REFN":
+            need("BASE" in seen, "REFN before BASE")
+            need(layers < st["L"], "more layer chunks than the %d declared levels" % st["L"])
+            n = st["declared"][layers] - st["declared"][layers - 1]
+            added = decode_refn(payload, st["q"], current, n)
+            current = sorted(current + added)
+            layers += 1
+            pending_rcon = st["kind"] != 0
+            if not pending_rcon:
+                levels.append((st["L"] - layers, current))
+        elif t == "RCON":
+            need(st["kind"] != 0, "RCON in a stream of kind points")
+            need(pending_rcon, "RCON without a layer chunk before it")
+            parse_rcon(payload, len(current))
+            pending_rcon = False
+            levels.append((st["L"] - layers, current))
+        elif t == "HEND":
+            need(len(payload) == 0, "non-empty HEND")
+            need(len(levels) == st["L"], "HEND after %d of %d levels" % (len(levels), st["L"]))
+        else:
+            raise DecodeError("bad_chunk", "unknown critical chunk %s" % t)
+        seen.add(t)
+    if not levels:
+        raise DecodeError("truncated", "the stream ends before its first level is complete")
+    warning = None
+    if cut:
+        warning = "the stream is cut: %d of %d levels decoded" % (len(levels), st["L"])
+    return st, levels, warning
+
+
+def g17(v):
+    return "%.17g" % v
+
+
+def header_json(st):
+    pts = list(reversed(st["declared"]))
+    return ("{\n"
+            '  "kind": "%s",\n'
+            '  "q": %d,\n'
+            '  "origin": [%s, %s, %s],\n'
+            '  "step": %s,\n'
+            '  "levels": %d,\n'
+            '  "level_points": [%s]\n'
+            "}\n") % (KIND_NAMES[st["kind"]], st["q"], g17(st["origin"][0]), g17(st["origin"][1]),
+                      g17(st["origin"][2]), g17(st["step"]), len(pts), ", ".join(str(v) for v in pts))
+
+
+def main(argv):
+    if len(argv) != 3:
+        sys.stderr.write("usage: refdec.py IN.hmc OUTDIR\n")
+        return 1
+    src, out = argv[1], argv[2]
+    try:
+        with open(src, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        sys.stderr.write("refdec: %s: io_error: %s\n" % (src, e))
+        return 2
+    try:
+        st, levels, warning = decode(data)
+    except DecodeError as e:
+        sys.stderr.write("refdec: %s: %s: %s\n" % (src, e.cls, e.msg))
+        return 3
+    if warning:
+        sys.stderr.write("refdec: warning: %s: %s\n" % (src, warning))
+    try:
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "header.json"), "w", newline="\n") as f:
+            f.write(header_json(st))
+        for K, pts in levels:
+            with open(os.path.join(out, "level-%d.points" % K), "w", newline="\n") as f:
+                f.write("".join("%d %d %d\n" % p for p in pts))
+    except OSError as e:
+        sys.stderr.write("refdec: %s: io_error: %s\n" % (out, e))
+        return 4
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
