@@ -289,24 +289,36 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
     }
     return chi;
   };
+  // defects(v) depends only on the labels of the tetrahedra around v (a
+  // face containing v lies between two of them), so it is cached and
+  // recomputed only after one of those flips.
+  std::vector<int> cache(n, -1);
+  auto defects = [&](std::uint32_t v) {
+    if (cache[v] < 0) cache[v] = local_defects(dt, inside, start, incident, want, v, scratch);
+    return cache[v];
+  };
+  auto flip = [&](std::uint32_t t) {
+    inside[t] ^= 1;
+    for (auto v : dt.tets[t]) cache[v] = -1;
+  };
   auto around = [&](std::uint32_t t) {
     int d = 0;
-    for (auto v : dt.tets[t]) d += local_defects(dt, inside, start, incident, want, v, scratch);
+    for (auto v : dt.tets[t]) d += defects(v);
     return d;
   };
   for (int round = 0; round < 6; ++round) {
     bool changed = false;
     for (std::uint32_t v = 0; v < n; ++v) {
-      if (local_defects(dt, inside, start, incident, want, v, scratch) == 0) continue;
+      if (defects(v) == 0) continue;
       for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
         const std::uint32_t t = incident[i];
         const int before = around(t), chi = local_euler(t);
-        inside[t] ^= 1;
+        flip(t);
         if (around(t) < before && local_euler(t) == chi) {
           changed = true;
-          if (local_defects(dt, inside, start, incident, want, v, scratch) == 0) break;
+          if (defects(v) == 0) break;
         } else {
-          inside[t] ^= 1;
+          flip(t);
         }
       }
     }

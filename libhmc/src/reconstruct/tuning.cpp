@@ -291,7 +291,10 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   const std::vector<std::uint8_t> want_all(n, kind == Kind::surface ? 1 : 0);
   std::uint64_t best_bits = ~std::uint64_t{0};
   std::uint64_t best_mismatch = 0;
-  const std::uint32_t ranks[] = {6, 10};
+  // A surface vertex has about six surface neighbours; a volume's boundary
+  // vertex more Delaunay edges inside the solid.
+  const std::vector<std::uint32_t> ranks = kind == Kind::surface ? std::vector<std::uint32_t>{6}
+                                                                  : std::vector<std::uint32_t>{6, 10};
   for (std::uint32_t rank : ranks) {
     const auto scale = local_scale(points, dt, rank);
     // Multiplier each vertex needs, in 1/256 units, capped to the table range.
@@ -304,6 +307,8 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     std::vector<std::uint32_t> sorted_ratio(ratio);
     std::sort(sorted_ratio.begin(), sorted_ratio.end());
     for (int classes : {1, 2, 4, 8, 16}) {
+      // Each trial on a coarser level runs the repair: try fewer there.
+      if (in.approximate && classes > 4) break;
       ReconParams p;
       p.scale_rank = rank;
       p.border = border;
@@ -368,6 +373,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     const std::pair<int, std::uint32_t> tries[] = {{kCircleRadius, 512}, {kEdgeRatio, 16},       {kDensity, 1024},
                                                    {kLone, 1},           {kNeighbourRadius, 4096}, {kNeighbourRatio, 32}};
     for (const auto& [id, threshold] : tries) {
+      if (in.approximate) break;  // coarser levels: the repair does better, at no cost
       ReconParams p = best;
       p.filters[static_cast<std::size_t>(id)] = threshold;
       const std::uint64_t c = cost(p);
