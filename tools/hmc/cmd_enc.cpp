@@ -48,7 +48,7 @@ int cmd_enc(int argc, char** argv) {
       return kUsage;
     }
   }
-  const std::string bm = a.get("--boundary", "constant");
+  const std::string bm = a.get("--boundary", "linear");
   if (bm == "constant") opt.boundary_mode = BoundaryMode::constant;
   else if (bm == "linear") opt.boundary_mode = BoundaryMode::linear;
   else if (bm == "adaptive") opt.boundary_mode = BoundaryMode::adaptive;

@@ -31,7 +31,7 @@ const char* kUsage =
     "      --kind K            points | surface | volume (default: detected from the input)\n"
     "      --levels N          levels of detail, 1..64 (default 1)\n"
     "      --ratio R           share of a level's vertices removed per level, (0,1] (default 0.3)\n"
-    "      --boundary M        constant | linear | adaptive Dmax (default constant)\n"
+    "      --boundary M        constant | linear | adaptive Dmax (default linear)\n"
     "      --optimizer O       forward | backward | greedy | best, for volume interiors (default best)\n"
     "      --fidelity F        rule | shape | exact reconstruction side information (default shape)\n"
     "      --canonical DIR     also write the canonical dump of every level\n"

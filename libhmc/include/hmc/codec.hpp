@@ -101,7 +101,9 @@ struct EncodeOptions {
   /// Share of a level's vertices to remove to make the next coarser level
   /// (0 < ratio <= 1; 1 removes as many as independence allows).
   double removal_ratio = 0.3;
-  BoundaryMode boundary_mode = BoundaryMode::constant;
+  /// Linear by default: a constant Dmax chosen on the finest level stalls
+  /// on coarser ones, whose vertices are farther from their neighbours' plane.
+  BoundaryMode boundary_mode = BoundaryMode::linear;
   Optimizer optimizer = Optimizer::best;
 };
 

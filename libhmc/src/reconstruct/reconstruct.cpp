@@ -378,7 +378,6 @@ int compare_circumradius(const std::vector<GridPoint>& pts, const std::array<std
       u[i] = static_cast<std::int64_t>(q[i]) - p[i];
       v[i] = static_cast<std::int64_t>(r[i]) - p[i];
     }
-    __extension__ typedef unsigned __int128 U128;
     U128 d = 0;
     for (int i = 0; i < 3; ++i) {
       const std::int64_t c = u[(i + 1) % 3] * v[(i + 2) % 3] - u[(i + 2) % 3] * v[(i + 1) % 3];
