@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <unistd.h>
 #include <optional>
 #include <string>
 
@@ -89,6 +90,13 @@ int cmd_enc(int argc, char** argv) {
     }
   }
 
+  // Progress on a terminal only: scripts reading stderr get no noise.
+  const bool tty = isatty(fileno(stderr)) != 0;
+  if (tty)
+    opt.progress = [](int level, double done) {
+      std::fprintf(stderr, "\rhmc: encoding, level %d, %3.0f%%", level, 100 * done);
+      std::fflush(stderr);
+    };
   const auto t0 = std::chrono::steady_clock::now();
   auto mesh = io::read_mesh(in, in_format);
   if (!mesh) return report("cannot read " + in, mesh.error(), Stage::input);
@@ -96,6 +104,7 @@ int cmd_enc(int argc, char** argv) {
   auto enc = encode(mesh.value(), opt);
   if (!enc) return report("cannot encode " + in, enc.error(), Stage::input);
   const auto t2 = std::chrono::steady_clock::now();
+  if (tty) std::fprintf(stderr, "\r%40s\r", "");
   const Encoded& e = enc.value();
   Outputs written;
   if (!out.empty()) {

@@ -17,6 +17,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -105,6 +106,9 @@ struct EncodeOptions {
   /// on coarser ones, whose vertices are farther from their neighbours' plane.
   BoundaryMode boundary_mode = BoundaryMode::linear;
   Optimizer optimizer = Optimizer::best;
+  /// Called as the encoder advances: the level being planned (0 = finest)
+  /// and the share of the work done, 0 to 1. It must not throw.
+  std::function<void(int level, double done)> progress = nullptr;
 };
 
 /// Per-level figures of an encoded or decoded stream.

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "codec/format.hpp"
@@ -198,7 +199,14 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   std::vector<LevelPlan> plans;
   DecimationState state;
   std::vector<GridPoint> current = fine_points;
+  // Work per level shrinks with its point count; report progress by points.
+  double work_done = 0, work_total = 0;
+  for (int k = 0; k < options.levels; ++k) work_total += std::pow(1.0 - 0.5 * options.removal_ratio, k);
+  auto progress = [&](int level, double share) {
+    if (options.progress) options.progress(level, std::min(1.0, (work_done + share) / work_total));
+  };
   for (int k = 0; k < options.levels; ++k) {
+    progress(k, 0);
     LevelPlan plan;
     plan.points = std::move(current);
     current.clear();
@@ -239,8 +247,10 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     plan.report.simplices = rep.kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
     if (k == 0) plan.dt = std::move(dt);
     plans.push_back(std::move(plan));
+    work_done += std::pow(1.0 - 0.5 * options.removal_ratio, k);
     if (current.empty()) break;
   }
+  progress(static_cast<int>(plans.size()) - 1, 1);
   // The coarsest level adds nothing to a coarser one.
   plans.back().added.clear();
 
