@@ -12,15 +12,6 @@ namespace hmc::detail {
 
 namespace {
 
-std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {
-  std::uint64_t s = 0;
-  for (int i = 0; i < 3; ++i) {
-    const std::int64_t d = static_cast<std::int64_t>(a[i]) - static_cast<std::int64_t>(b[i]);
-    s += static_cast<std::uint64_t>(d * d);
-  }
-  return s;
-}
-
 std::array<std::uint32_t, 3> face_of(const Tetrahedralization& dt, std::size_t t, int k) {
   const auto& tet = dt.tets[t];
   return {tet[kFaceVertices[k][0]], tet[kFaceVertices[k][1]], tet[kFaceVertices[k][2]]};

@@ -76,6 +76,16 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
                            const ReconParams& p);
 
+/// Exact squared distance of two grid points (below 3·2^42).
+inline std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {
+  std::uint64_t s = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::int64_t d = static_cast<std::int64_t>(a[i]) - static_cast<std::int64_t>(b[i]);
+    s += static_cast<std::uint64_t>(d * d);
+  }
+  return s;
+}
+
 /// Indices into ReconParams::filters.
 enum FilterId { kCircleRadius = 0, kEdgeRatio = 1, kDensity = 2, kLone = 3, kNeighbourRadius = 4, kNeighbourRatio = 5 };
 constexpr int kFilterCount = 6;

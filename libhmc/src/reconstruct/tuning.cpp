@@ -21,15 +21,6 @@ Face sorted(Face f) {
   return f;
 }
 
-std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {
-  std::uint64_t s = 0;
-  for (int i = 0; i < 3; ++i) {
-    const std::int64_t d = static_cast<std::int64_t>(a[i]) - static_cast<std::int64_t>(b[i]);
-    s += static_cast<std::uint64_t>(d * d);
-  }
-  return s;
-}
-
 // Bits to send a sorted list of `count` indices out of `range` as gaps.
 std::uint64_t list_bits(std::uint64_t count, std::uint64_t range) {
   if (count == 0) return 8;
