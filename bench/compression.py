@@ -13,10 +13,10 @@ bench/results/compression.md and PNG plots in bench/results/compression/.
 usage: bench/compression.py [--build build] [--repeat 3] [--budget 40]
                             [--models bunny,horse] [--big 1000000]
 
-Needs the hmc command line and the bench programs delaunay_time and
-mesh_convert (cmake ... && ninja -C BUILD hmc_cli delaunay_time mesh_convert),
+Needs the hmc command line and the bench programs delaunay_time, mesh_convert
+and peak_run (cmake ... && ninja -C BUILD hmc_cli delaunay_time mesh_convert peak_run),
 draco_encoder and draco_decoder (Debian package draco), numpy and matplotlib.
-Times are CPU seconds (user + system, os.wait4 rusage) of whole processes,
+Times are CPU seconds (user + system, wait4 rusage via bench/peak_run) of whole processes,
 median of the repeats; wall-clock medians are shown beside them. The harness
 replaces bench/bench_points.py (its 1M-point speed section is section 5)."""
 import argparse
@@ -65,24 +65,26 @@ def fail(msg):
     sys.exit(f"compression.py: {msg}")
 
 
+PEAK_RUN = None  # bench/peak_run, set in main()
+
+
 def run(cmd):
-    """Run a command to completion; return wall s, CPU s (user + system),
-    peak RSS (MiB) and stdout. Exits on failure."""
-    # Output goes to temporary files (no pipe to drain), so the child is
-    # reaped by os.wait4 alone, which returns its own rusage.
-    with tempfile.TemporaryFile() as fo, tempfile.TemporaryFile() as fe:
-        t0 = time.perf_counter()
-        p = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=fo, stderr=fe)
-        _, status, ru = os.wait4(p.pid, 0)
-        wall = time.perf_counter() - t0
-        p.returncode = code = os.waitstatus_to_exitcode(status)
+    """Run a command to completion through bench/peak_run (fork, exec,
+    wait4: see there why not os.wait4 from Python); return wall s, CPU s
+    (user + system of the command), peak RSS (MiB) and stdout. Exits on
+    failure."""
+    with tempfile.TemporaryFile() as fo, tempfile.TemporaryFile() as fe, \
+            tempfile.NamedTemporaryFile(mode="r", suffix=".rusage") as rep:
+        p = subprocess.run([PEAK_RUN, rep.name] + cmd, stdin=subprocess.DEVNULL, stdout=fo, stderr=fe)
         fo.seek(0)
         fe.seek(0)
-        out, err = fo.read(), fe.read()
-    if code != 0:
-        fail(f"{shlex.join(cmd)} failed ({code}): {err.decode(errors='replace').strip()}")
-    return {"wall": wall, "cpu": ru.ru_utime + ru.ru_stime, "rss": ru.ru_maxrss / 1024.0,
-            "out": out.decode(errors="replace"), "err": err.decode(errors="replace")}
+        out, err = fo.read().decode(errors="replace"), fe.read().decode(errors="replace")
+        fields = rep.read().split()
+    if p.returncode != 0 or len(fields) != 5 or fields[0] != "0":
+        code = fields[0] if fields else f"peak_run {p.returncode}"
+        fail(f"{shlex.join(cmd)} failed ({code}): {err.strip()}")
+    wall, user, system, kib = float(fields[1]), float(fields[2]), float(fields[3]), int(fields[4])
+    return {"wall": wall, "cpu": user + system, "rss": kib / 1024.0, "out": out, "err": err}
 
 
 def measure(cmd, repeat, budget):
@@ -167,6 +169,9 @@ def bench_model(a, tools, tmp, name, path, log):
     want = [(l["level"], l["points"], l["stream_bytes"]) for l in rep4["levels"]]
     r["decode_mismatch"] = None if got == want and not dec["truncated"] else f"decoded {got}, encoder reported {want}"
     r["dec_levels"] = dec["levels"]
+    # Informative: the 1-level stream, to separate the cost of the levels.
+    r["t_dec1"] = measure([tools["hmc"], "dec", h1], a.repeat, a.budget)
+    r["t_decp1"] = measure([tools["hmc"], "dec", h1, "--points-only"], a.repeat, a.budget)
 
     log(f"  {name}: one canonical Delaunay of the finest level")
     dump = os.path.join(tmp, name + "-dump")
@@ -179,11 +184,11 @@ def bench_model(a, tools, tmp, name, path, log):
         fail(f"{name}: the canonical dump has {r['del']['points']} points, the encoder reported {n0}")
 
     log(f"  {name}: Draco")
-    obj = os.path.join(tmp, name + ".obj")
-    npts, ntri = map(int, run([tools["mesh_convert"], path, obj])["out"].split())
+    obj, pobj = os.path.join(tmp, name + ".obj"), os.path.join(tmp, name + "-points.obj")
+    npts, ntri = map(int, run([tools["mesh_convert"], "--points", path, pobj])["out"].split())
     r["draco_input"] = (npts, ntri)
     pc = os.path.join(tmp, name + "-pc.drc")
-    run(["draco_encoder", "-point_cloud", "-i", obj, "-o", pc, "-qp", str(Q), "-cl", "10"])
+    run(["draco_encoder", "-point_cloud", "-i", pobj, "-o", pc, "-qp", str(Q), "-cl", "10"])
     r["draco_pc_bytes"] = os.path.getsize(pc)
     r["draco_pc"] = bits(r["draco_pc_bytes"], n0)
     ply = os.path.join(tmp, name + "-pc.ply")
@@ -191,6 +196,7 @@ def bench_model(a, tools, tmp, name, path, log):
     r["draco_pc_points"] = ply_vertex_count(ply)
     r["draco_mesh"] = r["t_draco_mesh"] = r["draco_mesh_points"] = None
     if ntri and r["kind"] == "surface":
+        run([tools["mesh_convert"], path, obj])
         me = os.path.join(tmp, name + "-mesh.drc")
         run(["draco_encoder", "-i", obj, "-o", me, "-qp", str(Q), "-cl", "10"])
         r["draco_mesh_bytes"] = os.path.getsize(me)
@@ -207,6 +213,9 @@ def bench_model(a, tools, tmp, name, path, log):
     r["r_enc"] = r["t_enc"]["cpu"] / base["cpu"]
     r["r_mem"] = r["t_dec"]["rss"] / base["rss"]
     r["r_mem_enc"] = r["t_enc"]["rss"] / base["rss"]
+    r["r_dec1"] = r["t_dec1"]["cpu"] / base["cpu"]
+    r["r_mem1"] = r["t_dec1"]["rss"] / base["rss"]
+    r["level_work"] = sum(l["points"] for l in rep4["levels"]) / n0
     r["r_dec_wall"] = r["t_dec"]["wall"] / base["wall"]
     r["r_enc_wall"] = r["t_enc"]["wall"] / base["wall"]
     shutil.rmtree(dump, ignore_errors=True)
@@ -237,7 +246,7 @@ def bench_big(a, tools, tmp, log):
 # Plots
 
 
-def plots(results, outdir, log):
+def plots(results, big, outdir, log):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -280,7 +289,8 @@ def plots(results, outdir, log):
         if r["anchors"][2]:
             ax.plot([x[i] - w, x[i] + w], [r["anchors"][2]] * 2, color="red", linewidth=2)
     handles = [Patch(facecolor=cmap(k / max(1, nlev - 1) * 0.85), edgecolor="black",
-                     label=f"4 levels: level {nlev - 1 - k} point layer") for k in range(nlev)]
+                     label=f"{LEVELS} levels: level {nlev - 1 - k} point layer" + (" (coarsest)" if k == 0 else ""))
+                for k in range(nlev)]
     handles += [Patch(facecolor="white", hatch="///", edgecolor="black", label="… its side information (hatched)"),
                 Patch(facecolor="tab:orange", edgecolor="black", label="1 level: point layer (side hatched)"),
                 Patch(facecolor="lightgrey", edgecolor="black", label="header and end chunk"),
@@ -322,27 +332,43 @@ def plots(results, outdir, log):
     fig.savefig(files[-1], dpi=110)
     plt.close(fig)
 
-    # 3. Time and memory ratios against one canonical Delaunay (log scale).
-    series = [("decode all levels + reconstruction / Delaunay (CPU)", "r_dec", "tab:blue", BAR_DECODE),
-              (f"encode {LEVELS} levels / Delaunay (CPU)", "r_enc", "tab:orange", BAR_ENCODE),
-              ("decode peak memory / Delaunay's", "r_mem", "tab:green", BAR_MEMORY)]
-    fig, ax = plt.subplots(figsize=(15, 6.5))
+    # 3. Time and memory ratios against one canonical Delaunay (log scale),
+    # and the 1M-point decoding race beside them.
+    series = [("decode all levels + reconstruction / Delaunay (CPU time)", "r_dec", "tab:blue"),
+              (f"encode {LEVELS} levels / Delaunay (CPU time)", "r_enc", "tab:orange"),
+              ("decode peak memory / Delaunay's", "r_mem", "tab:green")]
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(16, 6.5), gridspec_kw={"width_ratios": [6, 1]})
     w = 0.8 / len(series)
-    for k, (label, key, c, bar) in enumerate(series):
+    for k, (label, key, c) in enumerate(series):
         vals = [r[key] for r in results]
         xs = x - 0.4 + w * (k + 0.5)
         ax.bar(xs, vals, w, label=label, color=c, edgecolor="black", linewidth=0.3)
         for xi, v in zip(xs, vals):
-            ax.text(xi, v * 1.06, f"{v:.1f}", ha="center", fontsize=7, rotation=90)
-        ax.axhline(bar, color=c, linestyle="--", linewidth=1.2, label=f"bar ≤ {bar:g}")
+            ax.text(xi, v * 1.05, f"{v:.2f}" if key == "r_mem" else f"{v:.1f}", ha="center", va="bottom",
+                    fontsize=7, rotation=90, bbox=dict(facecolor="white", edgecolor="none", pad=0.3, alpha=0.8))
+    ax.axhline(BAR_DECODE, color="black", linestyle="--", linewidth=1.2,
+               label=f"bar ≤ {BAR_DECODE:g} (decode time; memory ≤ {BAR_MEMORY:g})")
+    ax.axhline(BAR_ENCODE, color="tab:orange", linestyle="--", linewidth=1.2, label=f"bar ≤ {BAR_ENCODE:g} (encode time)")
     ax.set_yscale("log")
     ax.set_xticks(x, names, rotation=30, ha="right")
     ax.set_ylabel("ratio to one canonical Delaunay of the finest level (log)")
-    ax.set_title("Cost against one Delaunay of the finest level (below the dashed line of its colour passes)")
+    ax.set_title("Cost against one Delaunay of the finest level (bars below their dashed line pass)")
     ax.legend(fontsize=8, loc="upper left", ncol=2)
     top = max(max(r["r_enc"], r["r_dec"]) for r in results)
-    ax.set_ylim(0.3, top * 4)
+    ax.set_ylim(0.3, top * 5)
     ax.grid(axis="y", alpha=0.3, which="both")
+    if big:
+        vals = [big["dec"]["cpu"], big["ddec"]["cpu"]]
+        bx.bar([0, 1], vals, 0.6, color=["tab:green", "tab:blue"], edgecolor="black", linewidth=0.3)
+        for i, v in enumerate(vals):
+            bx.text(i, v * 1.02, f"{v:.3f} s", ha="center", fontsize=8)
+        bx.set_xticks([0, 1], ["hmc dec\n(points only)", "draco_\ndecoder"], fontsize=8)
+        bx.set_ylabel("CPU seconds (median)")
+        bx.set_title(f"decode {big['points']:,} points\nto PLY (bar: hmc ≤ Draco)", fontsize=9)
+        bx.set_ylim(0, max(vals) * 1.2)
+        bx.grid(axis="y", alpha=0.3)
+    else:
+        bx.axis("off")
     fig.tight_layout()
     files.append(os.path.join(outdir, "time_ratios.png"))
     fig.savefig(files[-1], dpi=110)
@@ -362,16 +388,19 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
     rel = lambda p: os.path.relpath(p, os.path.dirname(out))
     say("# HMC compression benchmark (issue 6)")
     say("")
-    say(f"Regenerate: `{argv}` (about {elapsed / 60:.0f} min).  ")
+    say(f"Regenerate: `{argv}` (about {elapsed / 60:.0f} min), after building the tools: "
+        f"`cmake -S . -B {a.build_shown} -G Ninja -DCMAKE_BUILD_TYPE=Release && "
+        f"ninja -C {a.build_shown} hmc_cli delaunay_time mesh_convert peak_run`.  ")
     say(f"Date: {time.strftime('%Y-%m-%d %H:%M', time.localtime(started))}; "
         f"`{tools['version']}` from `{tools['hmc']}`, tree {tools['commit']}; "
         f"{tools['draco']}; Python {sys.version.split()[0]}.  ")
     say(f"Machine: {os.cpu_count()} cores, shared with other jobs (load average {loads[0]:.1f} at the start, "
         f"{loads[1]:.1f} at the end), so every time is the **median** of up to {a.repeat} runs "
         f"(fewer when the runs of one measurement exceeded {a.budget:g} s; counts in section 4). "
-        "Times are CPU seconds (user + system, `os.wait4` rusage) of whole processes, which the other jobs "
+        "Times are CPU seconds (user + system, `wait4` rusage) of whole processes, which the other jobs "
         "disturb far less than wall-clock time (shown beside); every program here is single-threaded. "
-        "Peak memory is the peak resident set of the process.")
+        "Peak memory is the peak resident set of the process (`ru_maxrss` from `wait4` in `bench/peak_run`, "
+        f"which launches every command; its floor, /bin/true's peak, is {tools['floor']:.1f} MiB).")
     say("")
     say(f"Bits per point are over the de-duplicated quantized points (q = {Q}) of the finest level, for "
         "Draco too. The ratio base is one canonical Delaunay of the finest level's points "
@@ -394,7 +423,7 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         passes = [p + int(o) for p, o in zip(passes, ok)]
         gp = f"{r['bpp4']:.2f} vs {g:.2f} {verdict(ok[1])}" if g else "– (no anchor)"
         say(f"| {r['name']} | {r['points']:,} | {r['r_levels']:.3f} {verdict(ok[0])} | {gp} | "
-            f"{r['r_dec']:.2f} {verdict(ok[2])} | {r['r_enc']:.1f} {verdict(ok[3])} | {r['r_mem']:.2f} {verdict(ok[4])} |")
+            f"{r['r_dec']:.2f} {verdict(ok[2])} | {r['r_enc']:.1f} {verdict(ok[3])} | {r['r_mem']:.3f} {verdict(ok[4])} |")
     n = len(results)
     say(f"| **models passing** | | {passes[0]}/{n} | {passes[1]}/{n} | {passes[2]}/{n} | {passes[3]}/{n} | {passes[4]}/{n} |")
     say("")
@@ -411,7 +440,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         f"decode / Delaunay {statistics.geometric_mean([r['r_dec'] for r in results]):.2f}, "
         f"encode / Delaunay {statistics.geometric_mean([r['r_enc'] for r in results]):.1f}.")
     say("")
-    say("Plots: " + ", ".join(f"[{os.path.basename(p)}]({rel(p)})" for p in plot_files) + ".")
+    say("Plots: " + ", ".join(f"[{os.path.basename(p)}]({rel(p)})" for p in plot_files) +
+        f"; raw numbers: [results.json]({rel(os.path.join(os.path.dirname(plot_files[0]), 'results.json'))}).")
     say("")
     for p in plot_files:
         say(f"![{os.path.basename(p)}]({rel(p)})")
@@ -449,6 +479,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         for lab, d in (("PC", dpc), ("mesh", dme)):
             if d is not None and abs(d) > DRACO_TOLERANCE:
                 notes.append(f"**{lab} off the anchor by {d:+.0%}**")
+        if r["draco_mesh_points"] is not None and r["draco_mesh_points"] < r["draco_input"][0]:
+            notes.append(f"Draco mesh codes only the {r['draco_mesh_points']:,} vertices that triangles use")
         if an[3] and r["draco_mesh"] is None:
             notes.append("anchor has a mesh figure, no triangles read here")
         if r["input_points"] != r["points"]:
@@ -490,33 +522,41 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
     # 3. Ratios in detail.
     say("## 3. Time and memory ratios")
     say("")
-    say("CPU-time ratios decide the bars; the wall-clock ratios (same medians) show how much the shared machine "
-        "moved them. Encode peak memory / Delaunay's is informative (the bar is on decoding).")
+    say(f"CPU-time ratios decide the bars; the wall-clock ratios (same medians) show how much the shared machine "
+        f"moved them. The other columns are informative: *Σ levels* is the points of all {LEVELS} levels over the "
+        "finest level's, i.e. how many finest-level Delaunays a decoder does that rebuilds every level from "
+        "scratch; *1-level* columns decode the 1-level stream of the same model (one Delaunay plus the "
+        "reconstruction rule), separating the cost of reconstructing one level from that of the levels.")
     say("")
-    say("| model | decode / Delaunay CPU | wall | encode / Delaunay CPU | wall | points-only decode / Delaunay CPU | "
-        "decode peak / Delaunay's | encode peak / Delaunay's |")
-    say("|---|---:|---:|---:|---:|---:|---:|---:|")
+    say(f"| model | decode / Delaunay (CPU) | wall | Σ levels | 1-level decode / Delaunay | encode / Delaunay (CPU) | "
+        f"wall | points-only decode / Delaunay, {LEVELS} levels | 1 level | decode peak / Delaunay's | 1-level decode "
+        "peak / Delaunay's | encode peak / Delaunay's |")
+    say("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in results:
-        say(f"| {r['name']} | {r['r_dec']:.2f} | {r['r_dec_wall']:.2f} | {r['r_enc']:.1f} | {r['r_enc_wall']:.1f} | "
-            f"{r['t_decp']['cpu'] / r['t_del']['cpu']:.2f} | {r['r_mem']:.2f} | {r['r_mem_enc']:.2f} |")
+        base = r["t_del"]["cpu"]
+        say(f"| {r['name']} | {r['r_dec']:.2f} | {r['r_dec_wall']:.2f} | {r['level_work']:.2f} | {r['r_dec1']:.2f} | "
+            f"{r['r_enc']:.1f} | {r['r_enc_wall']:.1f} | {r['t_decp']['cpu'] / base:.2f} | "
+            f"{r['t_decp1']['cpu'] / base:.2f} | {r['r_mem']:.2f} | {r['r_mem1']:.2f} | {r['r_mem_enc']:.2f} |")
     say("")
 
     # 4. Raw times.
     say("## 4. Times and peak memory")
     say("")
     say("Each cell: median CPU s (median wall s) / peak MiB [runs]. *Delaunay*: `bench/delaunay_time` on the "
-        "finest level's canonical points (whole process); *in-process* is the delaunay() call alone and, after "
-        "the slash, TetGen alone (`--tetgen-only`, one run). HMC decoding writes no file; Draco's decoder must "
+        "finest level's canonical points (whole process); *in-process* is the wall time of the delaunay() call "
+        "alone and, after the slash, of TetGen alone (`--tetgen-only`, one run). HMC decoding writes no file; Draco's decoder must "
         "write one (PLY).")
     say("")
     cell = lambda m: "–" if m is None else f"{m['cpu']:.3f} ({m['wall']:.3f}) / {m['rss']:.0f} [{m['runs']}]"
-    say(f"| model | tetrahedra | Delaunay | in-process s | HMC encode {LEVELS} levels | HMC decode all + reconstruction | "
-        "HMC decode points only | Draco PC decode | Draco mesh decode |")
-    say("|---|---:|---|---|---|---|---|---|---|")
+    say(f"| model | tetrahedra | Delaunay | in-process wall s | HMC encode {LEVELS} levels | HMC decode all + reconstruction | "
+        "HMC decode points only | HMC 1-level decode + reconstruction | HMC 1-level decode points only | "
+        "Draco PC decode | Draco mesh decode |")
+    say("|---|---:|---|---|---|---|---|---|---|---|---|")
     for r in results:
         say(f"| {r['name']} | {r['del']['tetrahedra']:,} | {cell(r['t_del'])} | {r['del']['delaunay_seconds']:.3f} / "
             f"{r['tetgen_only']['delaunay_seconds']:.3f} | {cell(r['t_enc'])} | {cell(r['t_dec'])} | "
-            f"{cell(r['t_decp'])} | {cell(r['t_draco_pc'])} | {cell(r['t_draco_mesh'])} |")
+            f"{cell(r['t_decp'])} | {cell(r['t_dec1'])} | {cell(r['t_decp1'])} | {cell(r['t_draco_pc'])} | "
+            f"{cell(r['t_draco_mesh'])} |")
     say("")
 
     # 5. 1M points.
@@ -545,6 +585,9 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
     say(f"- Decoded levels (points and prefix bytes) equal the encoder's report: "
         f"{'yes, every model' if not bad else 'NO: ' + '; '.join(r['name'] + ': ' + r['decode_mismatch'] for r in bad)}.")
     dd = [r["name"] for r in results if r["draco_pc_points"] != r["draco_input"][0]]
+    above = [f"{r['name']} ({r['bpp4']:.2f} > {r['anchors'][0]:.2f})" for r in results
+             if r["anchors"][0] and r["bpp4"] > r["anchors"][0]]
+    say(f"- {LEVELS}-level streams above the uniform-set bound: {', '.join(above) if above else 'none'}.")
     say(f"- Draco's point-cloud decoder returns as many points as the input has vertices: "
         f"{'yes' if not dd else 'no for ' + ', '.join(dd)} (Draco does not merge duplicates; HMC's counts are used "
         "for every bits-per-point figure).")
@@ -561,8 +604,8 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.dirname(here)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--build", default=os.path.join(root, "build"),
-                    help="build directory holding bin/hmc, bench/delaunay_time, bench/mesh_convert")
+    ap.add_argument("--build", help="build directory holding bin/hmc and bench/{delaunay_time,mesh_convert,peak_run} "
+                    "(default: the one --hmc is in, else build/)")
     ap.add_argument("--hmc", help="the hmc binary (default BUILD/bin/hmc)")
     ap.add_argument("--data", default=os.path.join(root, "..", "shared", "data"))
     ap.add_argument("--out", default=os.path.join(here, "results", "compression.md"))
@@ -576,18 +619,26 @@ def main():
     a = ap.parse_args()
     if a.repeat < 1:
         fail("--repeat must be at least 1")
+    if not a.build:
+        a.build = os.path.dirname(os.path.dirname(os.path.abspath(a.hmc))) if a.hmc else os.path.join(root, "build")
+    a.build_shown = os.path.relpath(a.build, root) if os.path.abspath(a.build).startswith(root + os.sep) else a.build
     started = time.time()
     loads = [os.getloadavg()[0]]
     tools = {"hmc": os.path.abspath(a.hmc or os.path.join(a.build, "bin", "hmc")),
              "delaunay_time": os.path.join(a.build, "bench", "delaunay_time"),
-             "mesh_convert": os.path.join(a.build, "bench", "mesh_convert")}
+             "mesh_convert": os.path.join(a.build, "bench", "mesh_convert"),
+             "peak_run": os.path.join(a.build, "bench", "peak_run")}
     for k, p in tools.items():
         if not os.access(p, os.X_OK):
-            fail(f"{p} not found: build it (ninja -C {a.build} hmc_cli delaunay_time mesh_convert) or pass --build")
+            fail(f"{p} not found: build it (ninja -C {a.build} hmc_cli delaunay_time mesh_convert peak_run) "
+                 "or pass --build")
+    global PEAK_RUN
+    PEAK_RUN = tools["peak_run"]
     for t in ("draco_encoder", "draco_decoder"):
         if not shutil.which(t):
             fail(f"{t} not found (apt-get install draco)")
     tools["version"] = run([tools["hmc"], "version"])["out"].strip()
+    tools["floor"] = statistics.median(run(["/bin/true"])["rss"] for _ in range(3))
     try:
         head = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
         dirty = subprocess.run(["git", "--no-optional-locks", "-C", root, "status", "--porcelain", "--untracked-files=no"],
@@ -617,10 +668,18 @@ def main():
         else:
             shutil.rmtree(tmp, ignore_errors=True)
     plot_dir = a.plots or os.path.join(os.path.dirname(os.path.abspath(a.out)), "compression")
-    plot_files = plots(results, plot_dir, log)
+    plot_files = plots(results, big, plot_dir, log)
     loads.append(os.getloadavg()[0])
     argv = "bench/compression.py" + "".join(" " + shlex.quote(x) for x in sys.argv[1:])
     report(a, argv, tools, results, big, started, time.time() - started, loads, plot_files, os.path.abspath(a.out))
+    # The raw numbers, for comparing runs (command outputs dropped).
+    strip = lambda v: {k: strip(x) for k, x in v.items() if k != "out"} if isinstance(v, dict) else v
+    raw = os.path.join(plot_dir, "results.json")
+    with open(raw, "w") as f:
+        json.dump({"command": argv, "date": time.strftime("%Y-%m-%d %H:%M", time.localtime(started)),
+                   "hmc": tools["version"], "tree": tools["commit"], "models": [strip(r) for r in results],
+                   "big": strip(big) if big else None}, f, indent=1)
+    log(f"wrote {raw}")
     log(f"wrote {a.out} in {time.time() - started:.0f} s")
 
 

@@ -17,6 +17,7 @@ import concurrent.futures
 import io
 import json
 import os
+import re
 import shlex
 import subprocess
 import sys
@@ -40,16 +41,14 @@ THESIS = {  # thesis tables and figure for each model
 OPTIMISERS = ["forward", "backward", "greedy"]
 LEVELS = 4            # levels of the thesis' tables and figures
 SHARE_TARGET = 0.10   # claim (d): "down to about a tenth of the vertices"
-# Claim (d): extra encodes with maximal removal, per kind: (label, options, only
-# when the runs before it all stayed above SHARE_TARGET of the vertices).
-DEEP_RUNS = {
-    "surface": [("deep", ["--levels", "12", "--ratio", "1.0"], False),
-                ("deep-linear", ["--levels", "16", "--ratio", "1.0", "--boundary", "linear"], True),
-                ("deep-linear-rule", ["--levels", "16", "--ratio", "1.0", "--boundary", "linear", "--fidelity", "rule"],
-                 False)],
-    "volume": [("deep", ["--levels", "22", "--ratio", "1.0"], False),
-               ("deep-linear", ["--levels", "22", "--ratio", "1.0", "--boundary", "linear"], True)],
-}
+# Claim (d): encodes with maximal removal and the encoder's other defaults, deep
+# enough to go below SHARE_TARGET where the encoder can; the first 12 levels are
+# those of `--levels 12` (levels are planned finest first). Then the same with
+# the decoder's alpha rule alone.
+DEEP_LEVELS = 24
+# The 4-level encodes decoded, measured and rendered: the defaults, and the
+# decoder's alpha rule alone (no label corrections) for comparison.
+SHOWN_RUNS = [("default", ["--levels", str(LEVELS)]), ("rule", ["--levels", str(LEVELS), "--fidelity", "rule"])]
 MAIN_SHARE = 0.9      # claim (d), lenient reading: the main sheet carries at least this share of the surface's vertices
 LONG = 10.0           # an element is "long" when its longest edge exceeds LONG x the level's median edge
 # Camera per model (elevation, azimuth in degrees) after turning the inputs' y-up into z-up.
@@ -113,13 +112,14 @@ def model_job(hmc, name, path, kind, work):
     r["analyze"] = hmc(name, "analyze", path, "--levels", LEVELS + (1 if kind == "volume" else 0), "--json")
     # The default encode at the thesis' depth, decoded level by level, then the
     # encodes with maximal removal for claim (d).
-    r["runs"] = {"default": encode_decode(hmc, name, path, work, f"{name}-default", ["--levels", str(LEVELS)], ext)}
-    for label, opts, conditional in DEEP_RUNS[kind]:
-        reached = min(run["enc"]["levels"][0]["points"] / run["enc"]["levels"][-1]["points"]
-                      for lab, run in r["runs"].items() if lab != "default") if len(r["runs"]) > 1 else 1.0
-        if conditional and reached <= SHARE_TARGET:
-            continue
-        r["runs"][label] = encode_decode(hmc, name, path, work, f"{name}-{label}", opts, ext)
+    r["runs"] = {}
+    for label, opts in SHOWN_RUNS:
+        run = encode_decode(hmc, name, path, work, f"{name}-{label}", opts, ext)
+        run["analyze"] = hmc(name, "analyze", os.path.join(work, f"{name}-{label}.hmc"), "--json")
+        r["runs"][label] = run
+    for label, extra in (("deep", []), ("deep-rule", ["--fidelity", "rule"])):
+        r["runs"][label] = encode_decode(hmc, name, path, work, f"{name}-{label}",
+                                         ["--levels", str(DEEP_LEVELS), "--ratio", "1.0"] + extra, ext)
     return r
 
 
@@ -575,6 +575,9 @@ def main():
         work = tmp.name
     hmc = Hmc(hmc_exe, work)
     version = hmc("-", "version", parse_json=False).strip()
+    # The encoder's defaults as the binary states them, for the report's header.
+    helptext = subprocess.run([hmc_exe, "help"], capture_output=True, text=True).stdout
+    defaults = {m.group(1): m.group(2) for m in re.finditer(r"--(\w+) +\S.*?\(default ([^)]*)\)", helptext)}
 
     models = []
     for m in SURFACES:
@@ -608,10 +611,11 @@ def main():
     os.makedirs(fig_dir, exist_ok=True)
     for n, p, k in models:
         render_model(n, k, results[n]["runs"]["default"], os.path.join(fig_dir, f"{n}.png"))
+        render_model(n, k, results[n]["runs"]["rule"], os.path.join(fig_dir, f"{n}-rule.png"))
         print(f"  rendered: {n}", file=sys.stderr)
 
     runtime = time.time() - t_start
-    md = write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, hmc.log, hmc.duplicate_keys)
+    md = write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, hmc.log, hmc.duplicate_keys, defaults)
     with open(os.path.join(a.out, "hierarchy.md"), "w") as fh:
         fh.write(md)
     print(f"wrote {os.path.join(a.out, 'hierarchy.md')} and {fig_dir}/*.png in {runtime:.0f} s", file=sys.stderr)
@@ -679,8 +683,9 @@ def claims(results):
                           f"{', '.join(o for o in OPTIMISERS if vn[o] == lo)} | "
                           + " / ".join(f"{rows[o][lvl]['qt1']:.4f}" for o in OPTIMISERS)
                           + f" | {' '.join(bests)} | {' '.join(rbests)} |")
-    a_v = ("holds" if raw_best["forward"] == cells else
-           "partly holds" if raw_best["forward"] >= max(raw_best.values()) else "does not hold")
+    plural = [raw_best["forward"] >= max(raw_best.values()), rate_best["forward"] >= max(rate_best.values())]
+    a_v = ("holds" if raw_best["forward"] == cells else "holds for the most part" if all(plural) else
+           "only partly holds" if any(plural) else "does not hold")
     S.append(f"- **(a) Forward optimisation gives the best quality — {a_v}.** Over 3 volumes × 3 coarser levels × "
              f"QT1–QT4 ({cells} comparisons) the highest mean quality is forward's in {raw_best['forward']}, "
              f"backward's in {raw_best['backward']}, greedy's in {raw_best['greedy']}; counted per removed vertex "
@@ -690,16 +695,16 @@ def claims(results):
              f"{max(spread):.4f} (median {np.median(spread):.4f}), while level 0 → 3 costs "
              f"{min(drop[2::3]):.3f}–{max(drop[2::3]):.3f} of QT1.")
     b1 = "holds" if fewest["greedy"] == cases else ("does not hold" if fewest["greedy"] == 0 else "partly holds")
-    b2 = "holds" if raw_worst["greedy"] == cells else ("does not hold" if raw_worst["greedy"] == 0 else "partly")
+    b2 = ("holds" if raw_worst["greedy"] == cells else "mostly holds" if raw_worst["greedy"] > cells / 2 else
+          "does not hold" if raw_worst["greedy"] == 0 else "partly holds")
     S.append(f"- **(b) Greedy removes the most vertices, and its quality suffers — the first half {b1}, the second "
              f"{b2}.** Of {cases} model × level cases the fewest vertices are kept by forward in {fewest['forward']}, "
              f"backward in {fewest['backward']}, greedy in {fewest['greedy']}; greedy keeps the *most* in "
              f"{most['greedy']}. Greedy has the lowest mean quality in {raw_worst['greedy']} of {cells} comparisons "
-             f"(forward {raw_worst['forward']}, backward {raw_worst['backward']}) although it removes the fewest. "
-             f"Greedy takes the whole interior in order of importance, smallest first: deep, high-degree vertices, "
-             f"each of which fixes many neighbours, so fewer independent vertices fit. (`hmc enc`'s default "
-             f"optimiser `best` keeps the labelling with the highest mean importance of the retained vertices and "
-             f"so tends to pick greedy, the one that removes the least; see section 3.)")
+             f"(forward {raw_worst['forward']}, backward {raw_worst['backward']})"
+             + (". Greedy takes the whole interior in order of importance, smallest first: deep, high-degree "
+                "vertices, each of which fixes many neighbours, so fewer independent vertices fit."
+                if most["greedy"] > cases / 2 else "."))
     D.append("### (a), (b): the three optimisers on the volumes")
     D.append("")
     D.append("From tables 4.7–4.12 (`hmc analyze`, removal ratio 0.3). *Best*: the optimiser with the highest mean "
@@ -730,7 +735,7 @@ def claims(results):
                 " → ".join(f"{g:.4f}" for g in ga[:3]) + " → … → " + " → ".join(f"{g:.4f}" for g in ga[-2:]))
             lines.append(f"| {n} | {label} ({src}) | {shown} | {ga[-1] / ga[0]:.2f} | "
                          f"{'none' if not d else ', '.join(f'{k - 1}→{k}' for k in d)} |")
-    four = [b for b in bad if b[1] == "default"]
+    four = [b for b in bad if not b[1].startswith("deep")]
     c_v = "holds" if not bad else ("holds on the 4-level tables, with exceptions deeper" if not four else
                                    "holds with exceptions")
     worst = sorted(bad, key=lambda b: b[4] / b[3])[:3]
@@ -739,8 +744,13 @@ def claims(results):
              + ("." if not bad else
                 f"; it shrinks in {len(bad)}, {len(four)} of them in the 4-level runs, the largest drops "
                 + ", ".join(f"{b[0]} {b[1]} level {b[2] - 1}→{b[2]} ({b[3]:.4f} → {b[4]:.4f})" for b in worst)
-                + ". On surfaces the drops come with the reconstruction artefacts of section 3 (long triangles "
-                  "and closed bubbles that come and go from level to level), not with the decimation itself."))
+                + f". By model: " + ", ".join(f"{m} {c}" for m, c in sorted(
+                    {m: sum(1 for b in bad if b[0] == m) for m in {b[0] for b in bad}}.items()))
+                + f"; {sum(1 for b in bad if b[1].endswith('rule'))} of them in `--fidelity rule` runs, the rest with "
+                  f"the default `shape`."
+                + (" All of them are on surfaces, where the reconstruction artefacts of section 3 (long triangles, "
+                   "closed bubbles) come and go from level to level and pull the mean edge length with them."
+                   if all(b[0] in SURFACES for b in bad) else "")))
     D.append("### (c): global alpha (mean edge length) per level, finest first")
     D.append("")
     D.append("Surfaces, default run: `ga` of `hmc analyze --json`; all else computed here from the decoded files over "
@@ -755,13 +765,14 @@ def claims(results):
     # (d) topology against the share of vertices kept.
     D.append("### (d): topology against the share of vertices kept")
     D.append("")
-    D.append("Extra encodes with maximal removal (`--ratio 1.0`), each level decoded and measured as in section 3 "
-             "(volumes: the boundary surface). First `--levels 12` (surfaces) or `--levels 22` (volumes) with the "
-             "default constant Dmax; when that stays above "
-             f"{pct(SHARE_TARGET)} of the vertices, the same with `--boundary linear` (Dmax growing with the level), "
-             "which goes further; for surfaces also `--fidelity rule` (the decoder's alpha rule alone, no label "
-             "corrections: the thesis' method). The encoder writes fewer levels when a level has nothing left to "
-             "remove. *Same*: as the **input** mesh — same components, each one manifold piece, same genus. *Main "
+    D.append("Extra encodes with maximal removal and the encoder's other defaults, `--levels "
+             f"{DEEP_LEVELS} --ratio 1.0` (run *deep*; its first 12 levels are exactly those of `--levels 12 "
+             "--ratio 1.0`, since the encoder plans levels finest first; more levels because 12 do not reach "
+             f"{pct(SHARE_TARGET)} of the vertices on most models), and the same with `--fidelity rule` (run "
+             "*deep-rule*: the decoder's alpha rule alone, no label corrections, the thesis' method). Each level is "
+             "decoded and measured as in section 3 (volumes: the boundary surface). The encoder writes fewer levels "
+             "when a level has nothing left to remove. *Same*: as the **input** mesh — same components, each one "
+             "manifold piece, same genus. *Main "
              f"sheet*: the largest manifold piece, its share of the surface's vertices and its genus; *main ok*: "
              f"it has the input's genus and at least {pct(MAIN_SHARE)} of the vertices.")
     D.append("")
@@ -770,7 +781,7 @@ def claims(results):
         r = results[n]
         ref = r["input_topology"]
         for label, run in r["runs"].items():
-            if label == "default":
+            if not label.startswith("deep"):
                 continue
             st = run["stats"]
             n0 = st[0]["points"]
@@ -782,7 +793,7 @@ def claims(results):
                      "genus | main sheet | main sheet genus | GA | same | main ok |")
             D.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
             x = {"model": n, "label": label, "n0": n0, "ref": ref, "coarsest": st[-1], "strict": None,
-                 "fail": None, "main": None}
+                 "fail": None, "main": None, "stats": st}
             for t in st:
                 ok = same_topology(t, ref)
                 mok = t["main_genus"] == ref["genus"] and ref["genus"] is not None and t["main_share"] >= MAIN_SHARE
@@ -822,27 +833,38 @@ def claims(results):
             if key == "strict" and x["fail"] is None:
                 return x["coarsest"]["points"] / x["n0"]
             return share(x, key) if x[key] is not None else 2.0
-        bs = min(mine, key=lambda x: reach(x, "strict"))
+        def badness(x):
+            f = x["fail"]
+            return 0 if f is None else f["nonmanifold_vertices"] + f["nonmanifold_edges"] + f["pieces"]
+        bs = min(mine, key=lambda x: (reach(x, "strict"), badness(x)))
         bm = min(mine, key=lambda x: reach(x, "main"))
         s_ok = reach(bs, "strict") <= SHARE_TARGET * 1.05
         m_ok = reach(bm, "main") <= SHARE_TARGET * 1.05
         strict_ok += s_ok
         main_ok += m_ok
-        if bs["fail"] is None:
-            s = f"*{n}* keeps the input's topology on every level, down to {pct(reach(bs, 'strict'))} ({bs['label']})"
+        f = bs["fail"]
+        if f is None:
+            s = f"*{n}*: the input's topology is kept on every level down to {pct(reach(bs, 'strict'))} ({bs['label']})"
             if not s_ok:
                 s += f", where the encoder stops, above {pct(SHARE_TARGET)}"
         elif bs["strict"] is None:
-            s = f"*{n}*: decoded level 0 already differs from the input ({why_not(bs['fail'], bs['ref'])})"
+            s = f"*{n}*: decoded level 0 already differs from the input ({why_not(f, bs['ref'])})"
         else:
-            f = bs["fail"]
-            s = (f"*{n}* keeps it down to {pct(reach(bs, 'strict'))}, then level {f['level']} "
-                 f"({pct(f['points'] / bs['n0'])}) has {why_not(f, bs['ref'])} ({bs['label']})")
-        if bm["main"]:
-            s += f"; main sheet ok down to {pct(reach(bm, 'main'))} ({bm['label']})"
+            kept = ("kept only at level 0" if bs["strict"]["level"] == 0 else
+                    f"kept down to {pct(reach(bs, 'strict'))}")
+            s = (f"*{n}*: {kept}; level {f['level']} ({pct(f['points'] / bs['n0'])}) has {why_not(f, bs['ref'])} "
+                 f"({bs['label']})")
+        mm = bm["main"]
+        if mm is None:
+            z = bm["stats"][0]
+            s += f"; even its main sheet differs at level 0 (genus {genus_s(z['main_genus'])}, {bm['label']})"
+        elif mm["level"] == 0:
+            nxt = bm["stats"][1] if len(bm["stats"]) > 1 else None
+            s += f"; its main sheet matches only at level 0 ({bm['label']}" + (
+                f"; level 1: genus {genus_s(nxt['main_genus'])}, {pct(nxt['main_share'])} of the vertices)"
+                if nxt is not None else ")")
         else:
-            z = bm["fail"] if bm["fail"] is not None and bm["fail"]["level"] == 0 else None
-            s += "; main sheet not ok at level 0" + (f" (genus {genus_s(z['main_genus'])})" if z else "")
+            s += f"; its main sheet matches down to {pct(reach(bm, 'main'))} ({bm['label']})"
         parts.append(s)
     d_v = "holds" if strict_ok == len(parts) else ("partly holds" if strict_ok else "does not hold")
     S.append(f"- **(d) The topology (components, genus) survives down to about a tenth of the vertices — {d_v}.** "
@@ -860,32 +882,48 @@ def observations(results, duplicate_keys):
     """Oddities in what hmc produced, with the numbers."""
     O = []
     # Closed bubbles on the coarser surface levels.
-    rows = []
-    for n in SURFACES:
-        for t in results[n]["runs"]["default"]["stats"][1:]:
-            rows.append((n, t))
-    worst = max(rows, key=lambda x: 1 - x[1]["main_vertices"] / x[1]["points"])
-    tot_p = sum(t["pieces"] - t["components"] for _, t in rows)
-    if tot_p:
-        n, t = worst
-        O.append(f"- **Coarser surface levels are not clean surfaces** (default `--fidelity shape`). Besides the main "
-                 f"sheet, levels 1–3 carry {tot_p:,} extra closed manifold pieces in all, mostly the four faces of a "
-                 f"single tetrahedron, each touching the rest only at vertices (hence the non-manifold vertices of "
-                 f"section 3). Worst: {n} level {t['level']}, {t['pieces']:,} pieces; the main sheet has only "
-                 f"{t['main_vertices']:,} of the {t['points']:,} vertices and {t['main_faces']:,} of the "
-                 f"{t['faces']:,} triangles. Level 0 is clean on all three. With `--fidelity rule` the bubbles "
-                 f"mostly go (claim (d) tables, runs `deep-linear-rule`), but points are left out of the surface "
-                 f"instead (isolated points).")
+    def bubbles(label):
+        rows = [(n, t) for n in SURFACES for t in results[n]["runs"][label]["stats"][1:]]
+        worst = min(rows, key=lambda x: x[1]["main_share"])
+        return rows, sum(t["pieces"] - t["components"] for _, t in rows), worst
+    rows, extra, (wn, wt) = bubbles("default")
+    _, extra_rule, (rn, rt) = bubbles("rule")
+    clean0 = all(results[n]["runs"]["default"]["stats"][0]["pieces"] == 1 and
+                 results[n]["runs"]["default"]["stats"][0]["nonmanifold_vertices"] == 0 for n in SURFACES)
+    if extra:
+        longs = {lab: sum(t["long"] for n in SURFACES for t in results[n]["runs"][lab]["stats"][1:])
+                 for lab in ("default", "rule")}
+        coarse = {lab: ", ".join(f"{n} {results[n]['runs'][lab]['stats'][-1]['points']:,}" for n in SURFACES)
+                  for lab in ("default", "rule")}
+        O.append(f"- **With the default `--fidelity shape`, the coarser surface levels are not clean surfaces.** "
+                 f"Besides the main sheet, levels 1–3 of the three surfaces carry {extra:,} extra closed manifold "
+                 f"pieces, mostly the four faces of a single tetrahedron, touching the rest only at vertices (hence "
+                 f"the non-manifold vertices in section 3), and {longs['default']:,} long triangles. Worst: {wn} level "
+                 f"{wt['level']}, {wt['pieces']:,} pieces; its main sheet has only {wt['main_vertices']:,} of the "
+                 f"{wt['vertices']:,} vertices and {wt['main_faces']:,} of the {wt['faces']:,} triangles (see the "
+                 f"figures). "
+                 + ("Level 0 is clean on all three. " if clean0 else "")
+                 + f"The same encodes with `--fidelity rule` (the decoder's rule alone) give {extra_rule:,} extra "
+                 f"pieces and {longs['rule']:,} long triangles (worst main sheet: {rn} level {rt['level']}, "
+                 f"{pct(rt['main_share'])} of the vertices), look right in the figures, and also decimate further "
+                 f"(level 3: {coarse['rule']} vertices, against {coarse['default']}), since each level is decimated "
+                 f"on its own reconstruction."
+                 + (" So it is what `shape` adds on coarser levels (its label corrections, or the repair of the "
+                    "levels it produces) that breaks them." if 5 * extra_rule < extra else ""))
     # Long elements.
-    longs = []
-    for n in SURFACES + VOLUMES:
-        for t in results[n]["runs"]["default"]["stats"]:
-            if t["long"]:
-                longs.append(f"{n} level {t['level']}: {t['long']}")
-    if longs:
-        O.append(f"- **Long elements** (longest edge > {LONG:g}× the level's median edge) in the decoded default runs: "
-                 + "; ".join(longs) + ". On the hand they are the strands between finger tips visible in its "
-                 "figure (flat tetrahedra, so they barely change the volume).")
+    longs = {}
+    for label, _ in SHOWN_RUNS:
+        longs[label] = [f"{n} level {t['level']}: {t['long']:,}" for n in SURFACES + VOLUMES
+                        for t in results[n]["runs"][label]["stats"] if t["long"]]
+    if longs["default"]:
+        O.append(f"- **Long elements** (longest edge > {LONG:g}× the level's median edge) in the decoded 4-level runs, "
+                 f"default: " + "; ".join(longs["default"]) + "; with `--fidelity rule`: "
+                 + ("; ".join(longs["rule"]) or "none") + "."
+                 + (lambda t: f" On the hand's level 0 they are the strands between finger tips visible in its "
+                    f"figure: flat tetrahedra spanning the gaps, which leave the volume almost unchanged but leave the "
+                    f"boundary with {t['nonmanifold_vertices']} non-manifold vertices and its main sheet with genus "
+                    f"{genus_s(t['main_genus'])} (input: 0)." if t["long"] else "")(
+                     results["hand_tetgen"]["runs"]["default"]["stats"][0]))
     # Level 0 vs input.
     for n in VOLUMES:
         i, t = results[n]["input_topology"], results[n]["runs"]["default"]["stats"][0]
@@ -899,7 +937,8 @@ def observations(results, duplicate_keys):
         for lev in results[n]["runs"]["default"]["enc"]["levels"]:
             if lev["level"] < LEVELS - 1:
                 picks[lev["optimizer"]] = picks.get(lev["optimizer"], 0) + 1
-    O.append("- `hmc enc --optimizer best` (the default) chose " + ", ".join(f"{o} {c}×" for o, c in sorted(picks.items()))
+    O.append("- `hmc enc --optimizer best` (the default) chose " + ", ".join(
+        f"{'a central-layer variant (reported as `best`)' if o == 'best' else o} {c}×" for o, c in sorted(picks.items()))
              + " for the 3 volumes × 3 decimations; its criterion (highest mean importance of the retained vertices) "
              "favours the optimiser that removes the fewest low-importance vertices, so *best* is not the one that "
              "removes the most nor the one with the best quality (claims (a), (b)).")
@@ -923,7 +962,7 @@ def observations(results, duplicate_keys):
     return O
 
 
-def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log, duplicate_keys):
+def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log, duplicate_keys, defaults):
     L = []
     head = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True,
                           text=True).stdout.strip() or "?"
@@ -935,14 +974,17 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
     L.append("")
     L.append(f"- Date: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; runtime {runtime:.0f} s "
              f"({t_hmc:.0f} s running `hmc`, {a.jobs} model(s) at a time).")
-    L.append(f"- `{version}` at `{hmc_exe}`; repository HEAD {head} when the report was made.")
-    L.append("- Options: q = 12 bits (the default) everywhere. Tables 4.1–4.12: `hmc analyze IN --levels 4 --json` "
-             "with the encoder's defaults (removal ratio 0.3 per level, constant Dmax, fidelity `shape`); for "
-             "volumes `analyze` encodes once per optimiser (forward, backward, greedy) and runs with `--levels 5` so "
-             "that level 3, the coarsest shown, is decimated too and reports its layers (levels 0–3 are the same "
-             "as with `--levels 4`: the encoder plans levels finest first). Figures and topology: `hmc enc IN "
-             "--levels 4` with the same defaults, whose optimiser for volumes is `best`. Claim (d): extra encodes "
-             "with maximal removal (`--ratio 1.0`, 12–22 levels, see there).")
+    built = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(os.path.getmtime(hmc_exe)))
+    L.append(f"- `{version}` at `{hmc_exe}` (built {built}); repository HEAD {head} when the report was made.")
+    dflt = ", ".join(f"`--{k} {defaults[k]}`" for k in ("bits", "ratio", "boundary", "optimizer", "fidelity")
+                     if k in defaults)
+    L.append(f"- Options: the encoder's defaults as `hmc help` states them ({dflt}) unless said otherwise. Tables "
+             "4.1–4.12: `hmc analyze IN --levels 4 --json`; for volumes `analyze` encodes once per optimiser "
+             "(forward, backward, greedy) and runs with `--levels 5` so that level 3, the coarsest shown, is "
+             "decimated too and reports its layers (levels 0–3 are the same as with `--levels 4`: the encoder plans "
+             "levels finest first). Figures and topology: `hmc enc IN --levels 4` (for volumes the optimiser is then "
+             "`best`), and again with `--fidelity rule` (the decoder's alpha rule alone) for comparison. Claim (d): "
+             f"extra encodes with maximal removal, `--levels {DEEP_LEVELS} --ratio 1.0` (see there).")
     L.append("- Inputs: surfaces `torus.obj`, `cat_lowres.obj`, `bimba.obj` (../shared/data/surface); volumes "
              "`skull_tetgen`, `hand_tetgen` (../shared/data/volume, TetGen .node/.ele) and *ball*: "
              "`hmc gen shells --vertices 587` (587 points on concentric shells, the thesis' sphere), encoded with "
@@ -1035,8 +1077,11 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
     # 3. topology of the decoded levels
     L.append("## 3. Topology of the decoded levels")
     L.append("")
-    L.append("`hmc enc IN -o M.hmc --levels 4`, then `hmc dec M.hmc --all-levels DIR --ext obj` (surfaces) or "
-             "`--ext mesh` (volumes, MEDIT), measured here from those files. Surfaces: the triangle mesh; volumes: "
+    L.append("`hmc enc IN -o M.hmc --levels 4` (defaults, fidelity `shape`) and the same with `--fidelity rule` "
+             "(rows marked *rule*: the decoder's alpha rule alone, no label corrections), then `hmc dec M.hmc "
+             "--all-levels DIR --ext obj` (surfaces) or `--ext mesh` (volumes, MEDIT), measured here from those "
+             "files; the second table per model gives the quality means of the same levels from `hmc analyze "
+             "M.hmc --json`. Surfaces: the triangle mesh; volumes: "
              "the boundary surface, the faces used by exactly one tetrahedron (*solids*: vertex-connected groups of "
              "tetrahedra). *Isolated pts*: decoded points in no triangle (surfaces) or no tetrahedron (volumes). "
              "*Components*: vertex-connected pieces of the (boundary) surface. *Manifold pieces*: the surface cut "
@@ -1051,13 +1096,29 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
     for n, p, kind in models:
         r = results[n]
         st = r["runs"]["default"]["stats"]
+        n0 = st[0]["points"]
         L.append(f"### {n}")
         L.append("")
         L += topo_header(kind)
-        n0 = st[0]["points"]
         L.append(topo_row("input", r["input_topology"], n0, kind))
-        for t in st:
-            L.append(topo_row(str(t["level"]), t, n0, kind))
+        for label, _ in SHOWN_RUNS:
+            for t in r["runs"][label]["stats"]:
+                L.append(topo_row(f"{t['level']}" + ("" if label == "default" else f" ({label})"), t, n0, kind))
+        L.append("")
+        # Quality per level, default against rule, from `hmc analyze STREAM --json`.
+        qs = ("tri_edge", "tri_angle") if kind == "surface" else QT
+        names = ("QT1", "QT2") if kind == "surface" else ("QT1", "QT2", "QT3", "QT4")
+        L.append("| level | fidelity | vertices | " + ("triangles" if kind == "surface" else "tets") + " | "
+                 + " | ".join(names) + " | stream bytes to this level |")
+        L.append("|---|---|---|---|" + "---|" * len(names) + "---|")
+        for label, _ in SHOWN_RUNS:
+            run = r["runs"][label]
+            sb = {lev["level"]: lev["stream_bytes"] for lev in run["enc"]["levels"]}
+            for row in sorted(run["analyze"]["levels"], key=lambda x: x["level"]):
+                L.append(f"| {row['level']} | {'shape' if label == 'default' else label} | "
+                         f"{row.get('nv', row.get('vn', 0)):,} | "
+                         f"{(row['triangles'] if kind == 'surface' else row['cn']):,} | "
+                         + " | ".join(f4(row[q]) for q in qs) + f" | {sb.get(row['level'], 0):,} |")
         L.append("")
         if kind == "surface":
             an = {row["level"]: row["nv"] for row in r["analyze"]["levels"]}
@@ -1068,7 +1129,7 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
         else:
             opt = [lev["optimizer"] for lev in sorted(r["runs"]["default"]["enc"]["levels"],
                                                       key=lambda x: x["level"])][:LEVELS - 1]
-            L.append(f"Optimiser chosen by `best` for the decimations 0→1, 1→2, 2→3: {', '.join(opt)}.")
+            L.append(f"Optimiser chosen by `best` (default run) for the decimations 0→1, 1→2, 2→3: {', '.join(opt)}.")
             L.append("")
 
     L.append("## 4. Claims: details")
@@ -1078,16 +1139,20 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
     # 5. figures
     L.append("## 5. Figures 4.1–4.6")
     L.append("")
-    L.append("The four levels of the default encode side by side, same camera and scale for all levels, flat shading "
+    L.append("The four levels side by side, same camera and scale for all levels, flat shading "
              "(|light · face normal|, two-sided, since decoded faces are not oriented). Volumes: top row the "
              "boundary surface of the tetrahedra; bottom row a cut-away, the tetrahedra whose centroid lies behind "
              "the plane through the centre facing the camera, cut faces in orange with their edges so that the "
              "interior tetrahedra show.")
     L.append("")
     for n, p, kind in models:
-        L.append(f"**{n}** (thesis figure {THESIS[n][2]})")
+        L.append(f"**{n}** (thesis figure {THESIS[n][2]}), default encode (fidelity `shape`):")
         L.append("")
         L.append(f"![{n}](hierarchy/{n}.png)")
+        L.append("")
+        L.append(f"**{n}**, the same with `--fidelity rule`:")
+        L.append("")
+        L.append(f"![{n}, fidelity rule](hierarchy/{n}-rule.png)")
         L.append("")
 
     L.append("## Commands run")

@@ -7,7 +7,7 @@
 #     the tree does not build with it: then clang's errors are printed as a
 #     warning); runs the whole CTest suite, fuzz corpus replays included.
 #  2. build-fuzz/: when clang has libFuzzer, the fuzz targets
-#     (-DHMC_BUILD_FUZZ=ON); runs each for HMC_FUZZ_SECONDS seconds
+#     (-DHMC_BUILD_FUZZ=ON); runs each, two at a time, for HMC_FUZZ_SECONDS s
 #     (default 20) from its seed corpus and regression inputs.
 #
 # Any sanitizer report, failing test, fuzz crash, leak or slow input
@@ -96,19 +96,36 @@ cmake --build "$FUZZ_BUILD" -j "$JOBS" --target $fuzz_bins
 
 SMOKE=$FUZZ_BUILD/smoke
 rm -rf "$SMOKE"
-for t in $TARGETS; do
-  mkdir -p "$SMOKE/corpus/$t" "$SMOKE/artifacts/$t"
-  seeds="$HMC_ROOT/fuzz/corpus/$t"
-  [ -d "$HMC_ROOT/fuzz/regressions/$t" ] && seeds="$seeds $HMC_ROOT/fuzz/regressions/$t"
+# smoke TARGET: fuzz it for FUZZ_SECONDS; writes $SMOKE/TARGET.log and .ok.
+smoke() {
+  mkdir -p "$SMOKE/corpus/$1" "$SMOKE/artifacts/$1"
+  seeds="$HMC_ROOT/fuzz/corpus/$1"
+  [ -d "$HMC_ROOT/fuzz/regressions/$1" ] && seeds="$seeds $HMC_ROOT/fuzz/regressions/$1"
   # shellcheck disable=SC2086
-  if "$FUZZ_BUILD/fuzz/fuzz_$t" -max_total_time="$FUZZ_SECONDS" -timeout=5 -rss_limit_mb=2048 \
-       -print_final_stats=1 -artifact_prefix="$SMOKE/artifacts/$t/" "$SMOKE/corpus/$t" $seeds \
-       >"$SMOKE/$t.log" 2>&1; then
+  "$FUZZ_BUILD/fuzz/fuzz_$1" -max_total_time="$FUZZ_SECONDS" -timeout=5 -rss_limit_mb=2048 \
+    -print_final_stats=1 -artifact_prefix="$SMOKE/artifacts/$1/" "$SMOKE/corpus/$1" $seeds \
+    >"$SMOKE/$1.log" 2>&1 && touch "$SMOKE/$1.ok"
+}
+# Two at a time (one per core of the reference machine).
+set -- $TARGETS
+while [ $# -gt 0 ]; do
+  smoke "$1" &
+  if [ $# -gt 1 ]; then
+    smoke "$2" &
+    shift
+  fi
+  shift
+  wait
+done
+failed=0
+for t in $TARGETS; do
+  if [ -f "$SMOKE/$t.ok" ]; then
     echo "sanitize: fuzz_$t: $(grep -o 'number_of_executed_units: *[0-9]*' "$SMOKE/$t.log" | grep -o '[0-9]*$') runs, $(grep -E '^#[0-9]+[[:space:]]+DONE' "$SMOKE/$t.log" | grep -o 'cov: [0-9]* ft: [0-9]*'), no failure"
   else
     tail -n 60 "$SMOKE/$t.log" >&2
     echo "sanitize: fuzz_$t FAILED; input in $SMOKE/artifacts/$t/, log in $SMOKE/$t.log" >&2
-    exit 1
+    failed=1
   fi
 done
+[ "$failed" = 0 ] || exit 1
 echo "sanitize: fuzz build and smoke took $(( $(date +%s) - fstart )) s; total $(( $(date +%s) - start )) s"

@@ -251,8 +251,9 @@ Result<Done> write_canonical_dump(const std::string& dir, Kind kind, const Scala
   for (const auto& l : levels) {
     const std::string stem = "level-" + std::to_string(l.lod);
     files.emplace_back(stem + ".points", points_text(*l.points));
-    if (kind == Kind::surface && l.triangles) files.emplace_back(stem + ".simplices", simplices_text(*l.triangles));
-    if (kind == Kind::volume && l.tetrahedra) files.emplace_back(stem + ".simplices", simplices_text(*l.tetrahedra));
+    // No simplices file when connectivity was not rebuilt (points-only decoding).
+    if (kind == Kind::surface && l.triangles && !l.points_only) files.emplace_back(stem + ".simplices", simplices_text(*l.triangles));
+    if (kind == Kind::volume && l.tetrahedra && !l.points_only) files.emplace_back(stem + ".simplices", simplices_text(*l.tetrahedra));
   }
 
   std::error_code ec;

@@ -110,6 +110,7 @@ struct DumpLevel {
   const std::vector<GridPoint>* points = nullptr;
   const std::vector<Triangle>* triangles = nullptr;       // surface kind
   const std::vector<Tetrahedron>* tetrahedra = nullptr;   // volume kind
+  bool points_only = false;                                // connectivity not rebuilt: no .simplices
 };
 
 /// Canonical dump (spec "Canonical dump"): header.json, level-K.points and,

@@ -34,7 +34,9 @@ int cmd_dec(int argc, char** argv) {
   opt.reconstruct = !a.flag("--points-only");
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
   if (!a.ok() || a.positional().size() != 1) {
-    std::fprintf(stderr, "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR] [--canonical DIR] [--json]\n",
+    std::fprintf(stderr,
+                 "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR [--ext EXT]] [--canonical DIR]\n"
+                 "                  [--points-only] [--max-points N] [--max-levels N] [--json]\n",
                  a.ok() ? "need one input stream" : a.error().c_str());
     return kUsage;
   }
@@ -78,7 +80,7 @@ int cmd_dec(int argc, char** argv) {
     const std::string dir = a.get("--canonical");
     const bool existed = exists(dir);
     std::vector<DumpLevel> levels;
-    for (const auto& l : d.levels) levels.push_back({l.lod, &l.points, &l.triangles, &l.tetrahedra});
+    for (const auto& l : d.levels) levels.push_back({l.lod, &l.points, &l.triangles, &l.tetrahedra, !opt.reconstruct});
     auto w = write_canonical_dump(dir, d.kind, d.quantizer, d.declared_points, levels);
     if (!w) return report("cannot write the canonical dump", w.error(), Stage::output);
     if (!existed) written.add(dir);

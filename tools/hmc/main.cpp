@@ -41,6 +41,7 @@ const char* kUsage =
     "      --level K           stop at level K (0 = finest)\n"
     "      --all-levels DIR    write every decoded level to DIR/level-K.<ext> (--ext, default ply)\n"
     "      --canonical DIR     write the canonical dump (header.json, level-K.points)\n"
+    "      --points-only       decode points only: no reconstruction (RCON is still checked)\n"
     "      --max-points N      refuse streams with more points (default 67108864)\n"
     "      --json              print a summary as JSON\n"
     "  info IN.hmc         list chunks and levels [--json]\n"
@@ -61,6 +62,11 @@ int main(int argc, char** argv) {
     return hmc::cli::kUsage;
   }
   const std::string cmd = argv[1];
+  for (int i = 2; i < argc; ++i)
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
   if (cmd == "enc") return hmc::cli::cmd_enc(argc, argv);
   if (cmd == "dec") return hmc::cli::cmd_dec(argc, argv);
   if (cmd == "info") return hmc::cli::cmd_info(argc, argv);
