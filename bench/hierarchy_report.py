@@ -748,8 +748,8 @@ def claims(results):
                     {m: sum(1 for b in bad if b[0] == m) for m in {b[0] for b in bad}}.items()))
                 + f"; {sum(1 for b in bad if b[1].endswith('rule'))} of them in `--fidelity rule` runs, the rest with "
                   f"the default `shape`."
-                + (" All of them are on surfaces, where the reconstruction artefacts of section 3 (long triangles, "
-                   "closed bubbles) come and go from level to level and pull the mean edge length with them."
+                + (" All of them are on surfaces, whose reconstruction changes from level to level (long triangles "
+                   "and loose pieces come and go, section 3); on the volumes GA grows at every step."
                    if all(b[0] in SURFACES for b in bad) else "")))
     D.append("### (c): global alpha (mean edge length) per level, finest first")
     D.append("")
@@ -848,7 +848,7 @@ def claims(results):
             if not s_ok:
                 s += f", where the encoder stops, above {pct(SHARE_TARGET)}"
         elif bs["strict"] is None:
-            s = f"*{n}*: decoded level 0 already differs from the input ({why_not(f, bs['ref'])})"
+            s = f"*{n}*: decoded level 0 already differs from the input ({why_not(f, bs['ref'])}; {bs['label']})"
         else:
             kept = ("kept only at level 0" if bs["strict"]["level"] == 0 else
                     f"kept down to {pct(reach(bs, 'strict'))}")

@@ -1068,7 +1068,9 @@ TEST_CASE("meshio: truncated and corrupted files never crash") {
                                 "vertex 0 1 0\nendloop\nendfacet\nendsolid s\n");
 
   std::mt19937_64 rng(12345);
-  for (const auto& [file, bytes] : samples) {
+  for (const auto& sample : samples) {
+    const auto& file = sample.first;  // named locals: clang cannot capture structured bindings
+    const auto& bytes = sample.second;
     INFO(file);
     const std::string path = dir + "/fuzz_" + file;
     auto check = [&](const std::string& data) {
