@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 // hmc — the command line of the HMC codec. See `hmc help`.
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -57,6 +58,9 @@ const char* kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A full disk or a file-size limit must surface as a failed write (exit 4,
+  // nothing left behind), not as a SIGXFSZ kill halfway through a file.
+  std::signal(SIGXFSZ, SIG_IGN);
   if (argc < 2) {
     std::fputs(kUsage, stderr);
     return hmc::cli::kUsage;
