@@ -42,6 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
+VERSION = b"\x00\x04"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -343,6 +344,51 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     return b"\x00" + bw.bytes()
 
 
+def zigzag(v):
+    return 2 * v if v >= 0 else -2 * v - 1
+
+
+def vq_payload(points, codebook_size, step, pad_bit=0):
+    """§8A.2 coder 1. points: [(anchor, index, (r0, r1, r2))] in stream
+    order (anchors non-decreasing); the residuals are ignored when step is 0."""
+    gaps, prev = [], 0
+    for a, _, _ in points:
+        gaps.append(a - prev)
+        prev = a
+    gap_coder = Coder([min(g, 63) for g in gaps], 64)
+    index_coder = Coder([i for _, i, _ in points], codebook_size)
+    res = [[zigzag(r[a]) for _, _, r in points] for a in range(3)]
+    res_coders = [Coder([min(z, 63) for z in res[a]], 64) for a in range(3)] if step else []
+    bw = BitWriter()
+    bw.ue(step)
+    gap_coder.table(bw)
+    index_coder.table(bw)
+    for c in res_coders:
+        c.table(bw)
+
+    def escaped(coder, v):
+        coder.put(bw, min(v, 63))
+        if v >= 63:
+            bw.ue(v - 63)
+
+    for j, (a, i, r) in enumerate(points):
+        escaped(gap_coder, gaps[j])
+        index_coder.put(bw, i)
+        for ax in range(len(res_coders)):
+            escaped(res_coders[ax], res[ax][j])
+    return b"\x01" + bw.bytes(pad_bit)
+
+
+def vq_points(coarse, points, codebook, step, q):
+    """The points a coder-1 layer decodes to (§8A.2), in stream order."""
+    top = (1 << q) - 1
+    out = []
+    for a, i, r in points:
+        out.append(tuple(min(max(coarse[a][ax] + codebook[i][ax] + (step * r[ax] if step else 0), 0), top)
+                         for ax in range(3)))
+    return out
+
+
 def head_payload(kind, counts, flags=0):
     return bytes([kind, flags]) + varint(len(counts)) + b"".join(varint(c) for c in counts)
 
@@ -413,8 +459,11 @@ def describe_rcon(payload, n):
 
 
 def describe_refn(payload):
+    if payload[0] == 1:
+        br = refdec.BitReader(payload, 1, "bad_layer", "REFN")
+        return {"coder": 1, "residual_step": br.ue()}
     b = payload[1]
-    return {"neighbours": b >> 4, "classes": ((b >> 2) & 3) + 1}
+    return {"coder": 0, "neighbours": b >> 4, "classes": ((b >> 2) & 3) + 1}
 
 
 def describe(data):
@@ -692,6 +741,21 @@ ENCODED = [
      "the cube's 8 cospherical corners as a closed surface", sec("recon")),
     ("surface-octahedron", ("off", OCTA, [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4), (2, 0, 5), (1, 2, 5), (3, 1, 5), (0, 3, 5)]),
      ["--bits", "4"], None, "octahedron: six cospherical points", sec("recon")),
+    # lossy refinement layers (coder 1)
+    ("lossy-surface-torus-vq6-l3", ("gen", "torus", 300, 1), ["--levels", "3", "--vq-bits", "6"], None,
+     "lossy: two coder-1 layers (64-entry codebook, no residual) in a surface stream; reconstruction of the decoded points",
+     sec("vqtb", "refn", "rcon", "recon")),
+    ("lossy-points-ball-vq4-residual2-l4", ("gen", "ball", 250, 2), ["--levels", "4", "--vq-bits", "4", "--vq-residual", "2"], None,
+     "lossy: three coder-1 layers with residual step 2 (every coordinate within 1 of the input's)", sec("vqtb", "refn")),
+    ("lossy-volume-ball-vq5-l3", ("gen", "ball", 200, 7), ["--kind", "volume", "--levels", "3", "--vq-bits", "5"], None,
+     "lossy: coder-1 layers in a volume stream", sec("vqtb", "refn", "rcon", "recon")),
+    ("lossy-exact-residual1-l4", ("gen", "shells", 300, 2), ["--levels", "4", "--vq-bits", "5", "--vq-residual", "1"], None,
+     "exact coder 1 (residual step 1): the encoder keeps per layer the smaller of coders 0 and 1", sec("vqtb", "refn")),
+    ("lossy-points-q5-vq1-l3", ("gen", "ball", 300, 5), ["--bits", "5", "--levels", "3", "--vq-bits", "1"], None,
+     "lossy on a dense q = 5 grid with a 2-entry codebook: points moved off their best code to avoid collisions",
+     sec("vqtb", "refn")),
+    ("lossy-surface-sphere-q21-vq3-l2", ("gen", "sphere", 200, 1), ["--bits", "21", "--levels", "2", "--vq-bits", "3", "--vq-residual", "5"], None,
+     "lossy at q = 21: large codebook entries and escaped residuals", sec("vqtb", "refn", "recon")),
 ]
 
 
@@ -811,7 +875,7 @@ def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), 
         if rcons:
             ch.append(["RCON", rcons[i]])
     ch.append(["HEND", b""])
-    return join(SIG + b"\x00\x03", ch)
+    return join(SIG + VERSION, ch)
 
 
 def nested(pts, sizes, seed):
@@ -876,7 +940,122 @@ def hb_refn_q1():
     return hand_stream(0, 1, lv, [(1, 1, True), (0, 2, True)])
 
 
+def mixed_stream(kind, q, base, layers, codebook=None, rcons=None):
+    """A stream with BASE `base` and refinement layers of either coder:
+    ("vq", [(anchor, index, residual)], step) or ("octree", added points,
+    neighbours, classes). Returns (stream, levels decoded, coarsest first)."""
+    levels = [sorted(set(base))]
+    payloads = []
+    for layer in layers:
+        coarse = levels[-1]
+        if layer[0] == "vq":
+            _, pts, step = layer
+            added = vq_points(coarse, pts, codebook, step, q)
+            payloads.append(vq_payload(pts, len(codebook), step))
+        else:
+            _, added, nb, cl = layer
+            added = sorted(set(added) - set(coarse))
+            payloads.append(refn_payload(coarse, added, q, nb, cl))
+        levels.append(sorted(coarse + list(added)))
+    ch = [["HEAD", head_payload(kind, [len(l) for l in levels])], ["SQNT", sqnt_payload(q)]]
+    if codebook is not None:
+        ch.append(["VQTB", vqtb_payload(codebook)])
+    ch.append(["BASE", base_payload(levels[0], q)])
+    if rcons:
+        ch.append(["RCON", rcons[0]])
+    for i, pl in enumerate(payloads):
+        ch.append(["REFN", pl])
+        if rcons:
+            ch.append(["RCON", rcons[i + 1]])
+    ch.append(["HEND", b""])
+    return join(SIG + VERSION, ch), levels
+
+
+def free_vq_points(coarse, candidates, codebook, step, q):
+    """Keeps the candidates (anchor, index, residual) that decode to new,
+    distinct points, sorted into stream order."""
+    taken = set(coarse)
+    out = []
+    for c in sorted(candidates):
+        p = vq_points(coarse, [c], codebook, step, q)[0]
+        if p not in taken:
+            taken.add(p)
+            out.append(c)
+    return out
+
+
+def hb_vq_example():
+    """The example of spec §8A.2."""
+    data, _ = mixed_stream(0, 2, [(0, 0, 0), (3, 3, 3)], [("vq", [(0, 0, (0, 0, 0)), (0, 1, (0, 0, 0))], 0)],
+                           codebook=[(1, 0, 0), (-1, 2, 1)])
+    assert vq_payload([(0, 0, (0, 0, 0)), (0, 1, (0, 0, 0))], 2, 0) == bytes.fromhex("01c008a0"), "spec example drifted"
+    return data
+
+
+def hb_vq_escapes():
+    """K = 1 (a one-symbol index table), anchor gaps of 63 and more,
+    residuals whose zigzag reaches 63 and beyond, clamping at both ends."""
+    q = 10
+    base = rand_pts(90, q, 31)
+    r = random.Random(32)
+    anchors = [0, 0, 1, 64, 65, 65, 89, 89] + sorted(r.randrange(90) for _ in range(30))
+    cand = []
+    for k, a in enumerate(anchors):
+        res = (r.randrange(-40, 41), r.randrange(-3, 4), r.randrange(-400, 401))
+        if k % 7 == 0:
+            res = (-2000, 5000, 0)  # far outside the grid: clamped to 0 and 1023
+        cand.append((a, 0, res))
+    pts = free_vq_points(base, cand, [(0, 0, 0)], 3, q)
+    pts.sort(key=lambda c: c[0])
+    data, _ = mixed_stream(0, q, base, [("vq", pts, 3)], codebook=[(0, 0, 0)])
+    return data
+
+
+def hb_vq_mixed():
+    """Coders 1, 0, 1 in turn (the octree layer coded against a lossy level),
+    a codebook of 300 entries (multi-byte size, a large index alphabet) and
+    an exact residual (s = 1)."""
+    q = 8
+    r = random.Random(41)
+    base = rand_pts(40, q, 42)
+    codebook = [(r.randrange(-9, 10), r.randrange(-9, 10), r.randrange(-9, 10)) for _ in range(300)]
+    cand1 = [(r.randrange(40), r.randrange(300), (0, 0, 0)) for _ in range(45)]
+    l1 = free_vq_points(sorted(base), cand1, codebook, 0, q)
+    lvl1 = sorted(base + vq_points(sorted(base), l1, codebook, 0, q))
+    octo = [p for p in rand_pts(60, q, 43) if p not in set(lvl1)]
+    lvl2 = sorted(set(lvl1) | set(octo))
+    cand3 = [(r.randrange(len(lvl2)), r.randrange(4), (r.randrange(-2, 3), r.randrange(-2, 3), r.randrange(-2, 3)))
+             for _ in range(40)]
+    l3 = free_vq_points(lvl2, cand3, codebook, 1, q)
+    data, _ = mixed_stream(0, q, base, [("vq", l1, 0), ("octree", octo, 4, 2), ("vq", l3, 1)], codebook=codebook)
+    return data
+
+
+def hb_vq_surface():
+    """A lossy layer in a surface stream, with hand-written RCON: the
+    reconstruction runs on the decoded (lossy) points."""
+    q = 6
+    base = sphere_pts(60, q, 51)
+    r = random.Random(52)
+    codebook = [(3, 0, 0), (0, 3, 0), (0, 0, 3), (-3, 0, 0), (0, -3, 0), (0, 0, -3), (2, 2, -1), (-2, 1, 2)]
+    cand = [(r.randrange(60), r.randrange(8), (0, 0, 0)) for _ in range(50)]
+    pts = free_vq_points(sorted(base), cand, codebook, 0, q)
+    n0, n1 = len(set(base)), len(set(base)) + len(pts)
+    rc0 = rcon_payload(n0, flags=3, scale_rank=6, multipliers=(1024,))
+    rc1 = rcon_payload(n1, flags=3, scale_rank=6, multipliers=(900, 2000), classes=[i % 2 for i in range(n1)])
+    data, _ = mixed_stream(1, q, base, [("vq", pts, 0)], codebook=codebook, rcons=[rc0, rc1])
+    return data
+
+
 HANDBUILT = [
+    ("refn-vq-example", hb_vq_example, P,
+     "the example of section 8A.2: coder 1, K = 2, a one-symbol anchor table, a point clamped to the grid", sec("refn", "vqtb")),
+    ("refn-vq-escapes", hb_vq_escapes, P,
+     "coder 1 with K = 1 and residual step 3: escaped anchor gaps and residuals, clamping at 0 and 2^q - 1", sec("refn", "vqtb", "huff")),
+    ("refn-vq-mixed-coders", hb_vq_mixed, P,
+     "coders 1, 0 and 1 in one stream (an octree layer against a lossy level), a 300-entry codebook, an exact residual (s = 1)", sec("refn", "vqtb")),
+    ("refn-vq-surface", hb_vq_surface, F,
+     "a lossy layer (coder 1) in a surface stream with hand-written RCON: reconstruction of the decoded points", sec("refn", "vqtb", "rcon", "recon")),
     ("refn-tiny-coarse", hb_refn_tiny_coarse, P,
      "hand-built layers whose coarse level has fewer points than `neighbours` (k = |C|)", sec("refn")),
     ("refn-q1", hb_refn_q1, P,
@@ -919,7 +1098,7 @@ def stream_q1(base, counts=(1,), kind=0, rcon=None, q=1):
     if rcon is not None:
         ch.append(["RCON", rcon])
     ch.append(["HEND", b""])
-    return join(SIG + b"\x00\x03", ch)
+    return join(SIG + VERSION, ch)
 
 
 def neg_from(src, edits):
@@ -961,14 +1140,14 @@ def stream_q1_refn(refn, coarse=((0, 0, 0),), added=1, kind=0):
     counts = [len(coarse), len(coarse) + added]
     ch = [["HEAD", head_payload(kind, counts)], ["SQNT", sqnt_payload(1)], ["BASE", base_payload(list(coarse), 1)],
           ["REFN", refn], ["HEND", b""]]
-    return join(SIG + b"\x00\x03", ch)
+    return join(SIG + VERSION, ch)
 
 
 def surface_one_level(rcon, pts=None, q=4):
     pts = pts or rand_pts(30, q, 21)
     ch = [["HEAD", head_payload(1, [len(pts)])], ["SQNT", sqnt_payload(q)], ["BASE", base_payload(pts, q)],
           ["RCON", rcon], ["HEND", b""]]
-    return join(SIG + b"\x00\x03", ch)
+    return join(SIG + VERSION, ch)
 
 
 def f64(v):
@@ -1101,8 +1280,30 @@ NEGATIVE = [
      lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
     ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
-    ("neg-refn-coder", "bad_layer", P, "REFN coder 1", ["8A", "13"],
-     lambda: stream_q1_refn(b"\x01" + refn_single(0)[1:])),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 2", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x02" + refn_single(0)[1:])),
+    ("neg-vq-no-vqtb", "bad_layer", P, "a REFN of coder 1 in a stream without VQTB", ["8A.2", "13"],
+     lambda: vq_neg(drop_vqtb=True)),
+    ("neg-vq-anchor-range", "bad_layer", P, "coder 1: an anchor equal to the number of coarse points", ["8A.2", "13"],
+     lambda: vq_neg(points=[(0, 0, (0, 0, 0)), (8, 1, (0, 0, 0))])),
+    ("neg-vq-duplicate", "bad_layer", P, "coder 1: two added points that coincide", ["8A.2", "13"],
+     lambda: vq_neg(points=[(2, 1, (0, 0, 0)), (2, 1, (0, 0, 0))])),
+    ("neg-vq-coarse-point", "bad_layer", P, "coder 1: an added point equal to a coarse point (entry 0 is the zero vector)", ["8A.2", "13"],
+     lambda: vq_neg(points=[(1, 1, (0, 0, 0)), (3, 0, (0, 0, 0))])),
+    ("neg-vq-clamped-coarse", "bad_layer", P, "coder 1: a point clamped onto a coarse point", ["8A.2", "13"],
+     lambda: vq_neg(points=[(0, 3, (0, 0, 0)), (1, 1, (0, 0, 0))], anchor0=(0, 0, 0))),
+    ("neg-vq-step-range", "bad_layer", P, "coder 1: residual step 2^21", ["8A.2", "13"],
+     lambda: vq_neg(raw=b"\x01" + bits_payload(lambda bw: bw.ue(2**21)))),
+    ("neg-vq-trailing", "bad_layer", P, "coder 1: a byte after the bit stream", ["8A.2", "13"],
+     lambda: vq_neg(suffix=b"\x00")),
+    ("neg-vq-padding", "bad_layer", P, "coder 1: non-zero padding bits", ["1", "8A.2", "13"],
+     lambda: vq_neg(pad_bit=1)),
+    ("neg-vq-overrun", "bad_layer", P, "coder 1: the bit stream cut short (its last byte removed)", ["8A.2", "13"],
+     lambda: vq_neg(cut=1)),
+    ("neg-vq-count", "bad_layer", P, "coder 1: the layer codes three points where HEAD declares two (bits left over)", ["8A.2", "13"],
+     lambda: vq_neg(points=[(0, 1, (0, 0, 0)), (2, 1, (0, 0, 0)), (5, 2, (0, 0, 0))], extra_declared=-1)),
+    ("neg-vq-index-single", "bad_huffman_table", P, "coder 1: a one-symbol index table whose symbol is K (3 of 3)", ["7.1", "8A.2", "13"],
+     lambda: vq_neg(raw=b"\x01" + bits_payload(lambda bw: (bw.ue(0), write_table(bw, 64, single=0), bw.put(1, 1), bw.put(3, 2))))),
     ("neg-refn-empty", "bad_layer", P, "empty REFN payload", ["8A", "13"], lambda: stream_q1_refn(b"")),
     ("neg-refn-no-table", "bad_layer", P, "a node needs a table slot that is none", ["8A.1", "13"],
      lambda: stream_q1_refn(b"\x00" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1))))),
@@ -1152,11 +1353,37 @@ NEGATIVE = [
     ("neg-framing-first", "bad_chunk", P, "a bad HEAD and a byte after HEND: framing errors are found first", ["2", "13"],
      neg_from("points-ball-q12-l4", [{"op": "replace_payload", "at": 0, "payload": "07"}, {"op": "append", "hex": "00"}])),
     ("neg-rcon-vs-layer-order", "bad_chunk", P, "RCON before the level's layer chunk", ["3", "13"],
-     lambda: join(SIG + b"\x00\x03", [["HEAD", head_payload(1, [1])], ["SQNT", sqnt_payload(1)], ["RCON", rcon_payload(1)],
+     lambda: join(SIG + VERSION, [["HEAD", head_payload(1, [1])], ["SQNT", sqnt_payload(1)], ["RCON", rcon_payload(1)],
                                       ["BASE", base_payload([(0, 0, 0)], 1)], ["HEND", b""]])),
     ("neg-rcon-toggle-range", "bad_layer", F, "a toggle index equal to the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
     ("neg-rcon-drop-range", "bad_layer", F, "a drop index equal to four times the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
 ]
+
+
+def vq_neg(points=None, drop_vqtb=False, raw=None, suffix=b"", pad_bit=0, extra_declared=0, anchor0=None, cut=0):
+    """A stream of kind points, q = 3: 8 coarse points, a codebook of 3
+    entries (the zero vector first) and one coder-1 layer, with one defect."""
+    q = 3
+    coarse = rand_pts(8, q, 61)
+    if anchor0 is not None:
+        coarse = sorted(set([anchor0] + coarse[1:]))
+    codebook = [(0, 0, 0), (1, 0, 0), (0, -1, 1)] + ([(-1, -1, -1)] if anchor0 is not None else [])
+    if points is None:
+        points = [(0, 1, (0, 0, 0)), (2, 2, (0, 0, 0))]
+    if raw is not None:
+        payload = raw
+        n = 2
+    else:
+        payload = vq_payload(points, len(codebook), 0, pad_bit)
+        assert not pad_bit or payload != vq_payload(points, len(codebook), 0), "no padding bits to set"
+        n = len(points)
+    payload = payload[:len(payload) - cut] + suffix
+    counts = [len(coarse), len(coarse) + n + extra_declared]
+    ch = [["HEAD", head_payload(0, counts)], ["SQNT", sqnt_payload(q)]]
+    if not drop_vqtb:
+        ch.append(["VQTB", vqtb_payload(codebook)])
+    ch += [["BASE", base_payload(coarse, q)], ["REFN", payload], ["HEND", b""]]
+    return join(SIG + VERSION, ch)
 
 
 def sqnt_bytes(q=1, origin=(0.0, 0.0, 0.0), step=1.0, extra=b""):
@@ -1165,13 +1392,13 @@ def sqnt_bytes(q=1, origin=(0.0, 0.0, 0.0), step=1.0, extra=b""):
 
 def stream_with_sqnt(sq):
     ch = [["HEAD", head_payload(0, [1])], ["SQNT", sq], ["BASE", base_payload([(0, 0, 0)], 1)], ["HEND", b""]]
-    return join(SIG + b"\x00\x03", ch)
+    return join(SIG + VERSION, ch)
 
 
 def stream_with_vqtb(vq):
     ch = [["HEAD", head_payload(0, [1])], ["SQNT", sqnt_payload(1)], ["VQTB", vq], ["BASE", base_payload([(0, 0, 0)], 1)],
           ["HEND", b""]]
-    return join(SIG + b"\x00\x03", ch)
+    return join(SIG + VERSION, ch)
 
 
 # Builders that need the helpers above.

@@ -2,8 +2,9 @@
 # SPDX-License-Identifier: AGPL-3.0-or-later
 """refdec: a second, independent HMC decoder, written from spec/hmc.md alone.
 
-It decodes the points of every level and parses and validates all side
-information (HEAD, SQNT, VQTB, BASE, REFN, RCON), but does not build the
+It decodes the points of every level (refinement coders 0 and 1) and parses
+and validates all side information (HEAD, SQNT, VQTB, BASE, REFN, RCON),
+but does not build the
 Delaunay tetrahedralization or reconstruct triangles and tetrahedra: it
 writes the "points" profile of the canonical dump (spec/conformance.md),
 header.json and level-K.points.
@@ -373,10 +374,13 @@ def child_order(node, d, q, m, coarse, nb, neighbours):
     return [key[3] for key in keys]
 
 
-def decode_refn(payload, q, coarse, n):
-    """Returns the added points A (list). coarse: C in canonical order."""
+def decode_refn(payload, q, coarse, n, codebook=None):
+    """Returns the added points A (list). coarse: C in canonical order;
+    codebook: the VQTB entries, or None when the stream has no VQTB."""
     if not payload:
         raise DecodeError("bad_layer", "REFN: empty payload")
+    if payload[0] == 1:
+        return decode_vq(payload, q, coarse, n, codebook)
     if payload[0] != 0:
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     br = BitReader(payload, 1, "bad_layer", "REFN")
@@ -434,6 +438,54 @@ def decode_refn(payload, q, coarse, n):
     br.finish()
     if len(points) != n:
         raise DecodeError("bad_layer", "REFN: %d added points, the header declares %d" % (len(points), n))
+    return points
+
+
+# ---------------------------------------------------------------- §8A.2 anchored vector quantizer
+
+
+def decode_vq(payload, q, coarse, n, codebook):
+    """§8A.2: coder 1. Returns the added points A."""
+    if codebook is None:
+        raise DecodeError("bad_layer", "REFN: coder 1 needs a VQTB chunk, and the stream has none")
+    br = BitReader(payload, 1, "bad_layer", "REFN")
+    s = br.ue()
+    if s > 2**21 - 1:
+        raise DecodeError("bad_layer", "REFN: residual step %d above 2^21 - 1" % s)
+    anchor_table = read_code(br, 64)
+    index_table = read_code(br, len(codebook))
+    residual_tables = [read_code(br, 64) for _ in range(3)] if s > 0 else None
+
+    def escaped(t):
+        e = t.decode(br, "bad_layer")
+        return 63 + br.ue() if e == 63 else e
+
+    def signed(e):
+        return e // 2 if e % 2 == 0 else -(e + 1) // 2
+
+    top = (1 << q) - 1
+    points = []
+    anchor = 0
+    for j in range(n):
+        anchor += escaped(anchor_table)
+        if anchor >= len(coarse):
+            raise DecodeError("bad_layer", "REFN: anchor %d of point %d beyond the %d coarse points" % (anchor, j, len(coarse)))
+        V = codebook[index_table.decode(br, "bad_layer")]
+        c = coarse[anchor]
+        p = []
+        for a in range(3):
+            v = c[a] + V[a]
+            if s > 0:
+                v += s * signed(escaped(residual_tables[a]))
+            p.append(min(max(v, 0), top))
+        points.append(tuple(p))
+    br.finish()
+    if len(set(points)) != len(points):
+        raise DecodeError("bad_layer", "REFN: two added points coincide")
+    cs = set(coarse)
+    for p in points:
+        if p in cs:
+            raise DecodeError("bad_layer", "REFN: added point %s is a coarser level's point" % (p,))
     return points
 
 
@@ -613,11 +665,14 @@ def decode(data):
                 r.fail("size %d out of range" % K)
             if 3 * K > r.left():
                 r.fail("%d entries cannot fit in %d bytes" % (K, r.left()))
+            entries = []
             for _ in range(3 * K):
                 v = r.svarint()
                 if abs(v) > 2**21 - 1:
                     r.fail("entry %d out of range" % v)
+                entries.append(v)
             r.end()
+            st["codebook"] = [tuple(entries[i:i + 3]) for i in range(0, 3 * K, 3)]
         elif t == "BASE":
             need("SQNT" in seen, "BASE before SQNT")
             need("BASE" not in seen, "second BASE")
@@ -630,7 +685,7 @@ def decode(data):
             need("BASE" in seen, "REFN before BASE")
             need(layers < st["L"], "more layer chunks than the %d declared levels" % st["L"])
             n = st["declared"][layers] - st["declared"][layers - 1]
-            added = decode_refn(payload, st["q"], current, n)
+            added = decode_refn(payload, st["q"], current, n, st.get("codebook"))
             current = sorted(current + added)
             layers += 1
             pending_rcon = st["kind"] != 0

@@ -29,7 +29,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info"},
          {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio",
-          "--boundary", "--optimizer"});
+          "--boundary", "--optimizer", "--vq-bits", "--vq-residual"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
   bool kind_ok = true;
@@ -40,6 +40,16 @@ int cmd_enc(int argc, char** argv) {
   }
   opt.write_info = !a.flag("--no-info");
   opt.levels = static_cast<int>(a.get_int("--levels", 1, 1, 64));
+  opt.vq_bits = static_cast<int>(a.get_int("--vq-bits", 0, 0, 10));
+  opt.vq_residual = static_cast<std::uint32_t>(a.get_int("--vq-residual", 0, 0, (1 << 21) - 1));
+  if (a.ok() && opt.vq_bits > 0 && opt.levels < 2) {
+    std::fprintf(stderr, "hmc enc: --vq-bits needs --levels 2 or more (the base level stays exact)\n");
+    return kUsage;
+  }
+  if (a.ok() && a.has("--vq-residual") && opt.vq_bits == 0) {
+    std::fprintf(stderr, "hmc enc: --vq-residual needs --vq-bits\n");
+    return kUsage;
+  }
   if (a.has("--ratio")) {
     char* end = nullptr;
     const std::string r = a.get("--ratio");
@@ -152,9 +162,12 @@ int cmd_enc(int argc, char** argv) {
       j.key("layers").begin_array();
       for (auto n : l.layer_sizes) j.value(n);
       j.end_array();
+      j.key("coder").value(l.coder).key("max_error").value(l.max_error).key("rms_error").value(l.rms_error);
+      j.key("dropped_points").value(l.dropped_points);
       j.end_object();
     }
     j.end_array();
+    j.key("codebook_size").value(r.codebook_size);
     j.key("triangles").value(static_cast<std::uint64_t>(e.triangles.size()));
     j.key("tetrahedra").value(static_cast<std::uint64_t>(e.tetrahedra.size()));
     j.end_object();
@@ -170,6 +183,13 @@ int cmd_enc(int argc, char** argv) {
                   static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
                   static_cast<unsigned long long>(l.side_bytes), static_cast<unsigned long long>(l.label_corrections),
                   8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points));
+    if (r.codebook_size) {
+      std::printf("lossy refinement: codebook of %llu vectors (VQTB)\n", static_cast<unsigned long long>(r.codebook_size));
+      for (const auto& l : r.levels)
+        if (l.coder == 1)
+          std::printf("  level %d: error max %.3f, rms %.3f grid units; %llu point(s) dropped\n", l.lod, l.max_error,
+                      l.rms_error, static_cast<unsigned long long>(l.dropped_points));
+    }
     if (r.kind != Kind::points)
       std::printf("rebuilt by the decoder: %zu triangles, %zu tetrahedra\n", e.triangles.size(), e.tetrahedra.size());
     std::printf("%s: %llu bytes, %.3f bits per point (read %.3f s, encode %.3f s)\n", out.empty() ? "(no output)" : out.c_str(),

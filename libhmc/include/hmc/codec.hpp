@@ -106,6 +106,19 @@ struct EncodeOptions {
   /// on coarser ones, whose vertices are farther from their neighbours' plane.
   BoundaryMode boundary_mode = BoundaryMode::linear;
   Optimizer optimizer = Optimizer::best;
+  /// Lossy refinement layers (spec "Refinement layer", coder 1): 0 keeps
+  /// every level exact; B in 1..10 codes each point a refinement layer adds
+  /// as a coarser point (its anchor) plus one of 2^B displacement vectors,
+  /// a codebook the encoder trains on the layers (LBG) and sends in a VQTB
+  /// chunk. The base layer (coarsest level) stays exact. Needs levels >= 2.
+  /// The encoder plans each level's reconstruction on the points the
+  /// decoder will have.
+  int vq_bits = 0;
+  /// With vq_bits: 0 sends the codeword alone; s >= 1 adds a scalar
+  /// residual with step s, so that every coordinate is within s/2 of the
+  /// input's (s = 1: exact; the encoder then keeps, per layer, whichever of
+  /// the two coders is smaller). At most 2^21 - 1.
+  std::uint32_t vq_residual = 0;
   /// Called as the encoder advances: the level being planned (0 = finest)
   /// and the share of the work done, 0 to 1. It must not throw.
   std::function<void(int level, double done)> progress = nullptr;
@@ -131,6 +144,15 @@ struct LevelReport {
   double dmax = 0;                             ///< Dmax used (grid units)
   Optimizer optimizer = Optimizer::best;       ///< the inner optimiser that was used (what `best` chose)
   double mean_importance_retained = 0;         ///< mean IP (eq. 3.1) of the interior vertices kept
+
+  /// Refinement coder of this level's layer: 0 conditional octree (exact),
+  /// 1 anchored vector quantizer (EncodeOptions::vq_bits); 0 for the base.
+  int coder = 0;
+  // Encoder only, coder 1: distances (grid units) of the decoded added
+  // points from the input's, and input points the layer could not place.
+  double max_error = 0;
+  double rms_error = 0;
+  std::uint64_t dropped_points = 0;
 };
 
 /// What the encoder did.
@@ -142,6 +164,8 @@ struct EncodeReport {
   std::uint64_t duplicates_merged = 0;  ///< input_points - distinct_points
   std::uint64_t total_bytes = 0;
   std::vector<LevelReport> levels;      ///< coarsest first
+  /// Entries of the vector quantizer's codebook (VQTB); 0 when none is sent.
+  std::uint64_t codebook_size = 0;
 };
 
 /// One decoded level.

@@ -8,6 +8,7 @@
 #include "delaunay/delaunay.hpp"
 #include "reconstruct/reconstruct.hpp"
 #include "pointset/octree.hpp"
+#include "pointset/anchored_vq.hpp"
 #include "pointset/refine.hpp"
 #include "util/error.hpp"
 
@@ -171,11 +172,18 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
           fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
         level.points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, counts.front());
       } else {
-        if (c.payload[0] != static_cast<std::uint8_t>(RefineCoder::conditional_octree))
-          fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
         const auto& coarse = previous_points;
-        const auto added =
-            decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, counts[k] - counts[k - 1]);
+        const std::uint64_t n = counts[k] - counts[k - 1];
+        std::vector<GridPoint> added;
+        if (c.payload[0] == static_cast<std::uint8_t>(RefineCoder::conditional_octree)) {
+          added = decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, n);
+        } else if (c.payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq)) {
+          if (!out.vector_quantizer)
+            fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");
+          added = decode_vq_layer(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, *out.vector_quantizer, n);
+        } else {
+          fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
+        }
         level.points.resize(coarse.size() + added.size());
         std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), level.points.begin());
       }
@@ -273,6 +281,7 @@ StreamInfo inspect_impl(const std::uint8_t* data, std::size_t size, const Decode
       lr.new_points = lr.points - (k ? walk.header->points[k - 1] : 0);
       lr.layer_bytes = kChunkOverhead + c.length;
       lr.stream_bytes = c.offset + kChunkOverhead + c.length;
+      if (k > 0 && c.length > 0) lr.coder = c.payload[0];
       info.levels.push_back(lr);
     }
   }

@@ -2,10 +2,12 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <unordered_map>
 
 #include "codec/format.hpp"
 #include "hierarchy/hierarchy.hpp"
 #include "pointset/refine.hpp"
+#include "pointset/anchored_vq.hpp"
 #include "delaunay/delaunay.hpp"
 #include "reconstruct/tuning.hpp"
 #include "reconstruct/winding.hpp"
@@ -144,12 +146,15 @@ std::vector<std::uint32_t> index_in(const std::vector<GridPoint>& points, const 
   return idx;
 }
 
-// Reconstruction side information and result for one level.
+// Reconstruction side information and result for one level. `fine_index`
+// maps each finest input point to its index in the level (~0u: not in it);
+// by default, by equality of the points (levels coded exactly).
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
-                         Fidelity fidelity, const LevelPlan* finest) {
+                         Fidelity fidelity, const LevelPlan* finest,
+                         const std::vector<std::uint32_t>* fine_index = nullptr) {
   const bool coarser = finest != nullptr;
-  const auto idx = index_in(fine_points, plan.points);
+  const auto idx = fine_index ? *fine_index : index_in(fine_points, plan.points);
   std::vector<Triangle> faces;  // input faces whose vertices all survive, on this level
   for (const auto& f : fine.surface)
     if (idx[f[0]] != ~0u && idx[f[1]] != ~0u && idx[f[2]] != ~0u) faces.push_back({idx[f[0]], idx[f[1]], idx[f[2]]});
@@ -170,8 +175,113 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   plan.report.rule_mismatches = tr.mismatches_before_toggles;
 }
 
+// Candidate anchors per point of a lossy layer (its nearest coarse points).
+constexpr int kVqAnchors = 4;
+constexpr int kMaxVqBits = 10;
+
+std::uint64_t pack_point(const GridPoint& p) {
+  return (std::uint64_t{p[0]} << 42) | (std::uint64_t{p[1]} << 21) | p[2];
+}
+
+// Lossy refinement layers (EncodeOptions::vq_bits): trains the codebook on
+// the planned levels, codes the layers coarsest first against the points
+// the decoder will have, replaces each level's points by those and
+// re-plans its reconstruction on them. payloads[i] receives the REFN
+// payload of plans[i]. A layer whose every point had to be dropped removes
+// its level. Returns the codebook (empty when no layer uses it).
+VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vector<std::uint8_t>>& payloads, Kind kind,
+                           int q, const EncodeOptions& options, const InputOnGrid& fine,
+                           const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp) {
+  std::vector<VqTrainingLayer> training;
+  for (std::size_t i = plans.size() - 1; i-- > 0;) training.push_back({&plans[i + 1].points, &plans[i].added});
+  const VectorQuantizer vq = train_layer_codebook(training, options.vq_bits, kVqAnchors);
+  VqLayerOptions lo;
+  lo.step = options.vq_residual;
+  lo.anchors = kVqAnchors;
+
+  payloads.assign(plans.size(), {});
+  std::unordered_map<std::uint64_t, GridPoint> placed;  // input point -> decoded point, lossy layers only
+  std::unordered_map<std::uint64_t, bool> dropped;
+  bool exact = true;       // every level so far decoded to the input's points
+  bool vq_used = false;
+  std::vector<GridPoint> decoded = plans.back().points;  // the base layer is exact
+  for (std::size_t i = plans.size() - 1; i-- > 0;) {
+    LevelPlan& plan = plans[i];
+    VqLayer layer = encode_vq_layer(decoded, plan.added, vq, q, lo);
+    std::vector<GridPoint> added;
+    bool layer_exact = layer.dropped == 0;
+    for (std::size_t j = 0; j < plan.added.size(); ++j) {
+      if (!layer.kept[j]) {
+        dropped[pack_point(plan.added[j])] = true;
+        continue;
+      }
+      added.push_back(layer.decoded[j]);
+      if (layer.decoded[j] != plan.added[j]) layer_exact = false;
+      placed[pack_point(plan.added[j])] = layer.decoded[j];
+    }
+    if (added.empty()) {  // nothing left of this level
+      plans.erase(plans.begin() + static_cast<std::ptrdiff_t>(i));
+      payloads.erase(payloads.begin() + static_cast<std::ptrdiff_t>(i));
+      continue;
+    }
+    std::vector<std::uint8_t>& payload = payloads[i];
+    payload.push_back(static_cast<std::uint8_t>(RefineCoder::anchored_vq));
+    payload.insert(payload.end(), layer.bytes.begin(), layer.bytes.end());
+    if (exact && layer_exact) {
+      // Both coders are exact here: keep the smaller.
+      std::vector<std::uint8_t> octree = encode_refinement(decoded, plan.added, q);
+      if (octree.size() < layer.bytes.size()) {
+        payload.assign(1, static_cast<std::uint8_t>(RefineCoder::conditional_octree));
+        payload.insert(payload.end(), octree.begin(), octree.end());
+      }
+    }
+    const bool lossy_layer = payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq);
+    vq_used = vq_used || lossy_layer;
+    LevelReport& lr = plan.report;
+    if (lossy_layer) {
+      lr.coder = 1;
+      lr.max_error = layer.max_error;
+      lr.rms_error = std::sqrt(layer.sum_error2 / static_cast<double>(added.size()));
+      lr.dropped_points = layer.dropped;
+    }
+    const std::vector<GridPoint> original = plan.points;
+    sort_canonical(added);
+    std::vector<GridPoint> level(decoded.size() + added.size());
+    std::merge(decoded.begin(), decoded.end(), added.begin(), added.end(), level.begin());
+    plan.points = std::move(level);
+    plan.added = std::move(added);
+    decoded = plan.points;
+    exact = exact && layer_exact;
+    if (exact || kind == Kind::points) continue;
+    // Reconstruction on the decoded points: each input point of the level
+    // is where the decoder puts it.
+    const auto member = index_in(fine_points, original);
+    std::vector<std::uint32_t> idx(fine_points.size(), ~0u);
+    for (std::size_t f = 0; f < fine_points.size(); ++f) {
+      if (member[f] == ~0u) continue;
+      const std::uint64_t key = pack_point(fine_points[f]);
+      if (dropped.count(key)) continue;
+      const auto it = placed.find(key);
+      const GridPoint at = it == placed.end() ? fine_points[f] : it->second;
+      idx[f] = static_cast<std::uint32_t>(std::lower_bound(plan.points.begin(), plan.points.end(), at) - plan.points.begin());
+    }
+    const Tetrahedralization dt = delaunay(plan.points);
+    plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options.fidelity, i > 0 ? &plans.front() : nullptr,
+                        &idx);
+    lr.simplices = kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
+  }
+  for (std::size_t k = 0; k < plans.size(); ++k) plans[k].report.lod = static_cast<int>(k);
+  return vq_used ? vq : VectorQuantizer{};
+}
+
 Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   check_connectivity(input);
+  if (options.vq_bits < 0 || options.vq_bits > kMaxVqBits)
+    fail(Status::invalid_argument, "vq bits must be between 0 and 10, got " + std::to_string(options.vq_bits));
+  if (options.vq_residual > (std::uint32_t{1} << 21) - 1)
+    fail(Status::invalid_argument, "vq residual step must be at most 2^21 - 1");
+  if (options.vq_bits > 0 && options.levels < 2)
+    fail(Status::invalid_argument, "lossy refinement (vq bits) needs at least 2 levels: the base level stays exact");
   if (options.levels < 1 || options.levels > static_cast<int>(kMaxLevels))
     fail(Status::invalid_argument, "levels must be between 1 and 64, got " + std::to_string(options.levels));
   if (!(options.removal_ratio > 0 && options.removal_ratio <= 1))
@@ -253,6 +363,11 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   progress(static_cast<int>(plans.size()) - 1, 1);
   // The coarsest level adds nothing to a coarser one.
   plans.back().added.clear();
+  std::vector<std::vector<std::uint8_t>> lossy_payloads;  // REFN payloads of plan_lossy, by plan
+  VectorQuantizer codebook;
+  if (options.vq_bits > 0 && plans.size() > 1)
+    codebook = plan_lossy(plans, lossy_payloads, rep.kind, q, options, fine, fine_points, fine_gp);
+  rep.codebook_size = codebook.codebook.size();
 
   Header header;
   header.kind = rep.kind;
@@ -262,6 +377,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   w.chunk(kHead, header.write());
   w.chunk(kScalarQuantizer, write_scalar_quantizer(rep.quantizer));
   if (options.write_info) w.chunk(kInfo, info_payload(rep));
+  if (!codebook.codebook.empty()) w.chunk(kVectorQuantizer, write_vector_quantizer(codebook));
   for (std::size_t i = plans.size(); i-- > 0;) {
     LevelPlan& plan = plans[i];
     LevelReport& level = plan.report;
@@ -272,6 +388,9 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
       layer.bytes(encode_octree(plan.points, q));
       w.chunk(kBaseLayer, layer.data());
       level.new_points = plan.points.size();
+    } else if (!lossy_payloads.empty()) {
+      w.chunk(kRefinement, lossy_payloads[i]);
+      level.new_points = plans[i].added.size();
     } else {
       layer.u8(static_cast<std::uint8_t>(RefineCoder::conditional_octree));
       layer.bytes(encode_refinement(plans[i + 1].points, plans[i].added, q));

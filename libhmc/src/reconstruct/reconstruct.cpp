@@ -203,6 +203,8 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
 int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                   const std::vector<std::uint8_t>& want, std::uint32_t v, std::vector<std::uint32_t>& scratch) {
+  // scratch holds, for each interface face around v, its other two
+  // vertices (a, b) as consecutive entries.
   scratch.clear();
   for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
     const std::uint32_t t = incident[i];
@@ -218,15 +220,33 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
       }
     }
   }
-  int d = (want[v] && scratch.empty()) ? 1 : 0;
-  std::sort(scratch.begin(), scratch.end());
-  for (std::size_t i = 0; i < scratch.size();) {
+  const std::size_t faces = scratch.size() / 2;
+  if (faces == 0) return want[v] ? 1 : 0;
+  // Edges (v, w) used by other than two faces.
+  std::vector<std::uint32_t> ends(scratch);
+  std::sort(ends.begin(), ends.end());
+  int d = 0;
+  for (std::size_t i = 0; i < ends.size();) {
     std::size_t j = i;
-    while (j < scratch.size() && scratch[j] == scratch[i]) ++j;
+    while (j < ends.size() && ends[j] == ends[i]) ++j;
     d += (j - i) != 2;
     i = j;
   }
-  return d;
+  // Fans: faces around v joined through shared edges (v, w); more than one
+  // fan makes v a pinch point.
+  std::vector<std::uint32_t> parent(faces);
+  for (std::uint32_t f = 0; f < faces; ++f) parent[f] = f;
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (std::uint32_t f = 0; f < faces; ++f)
+    for (std::uint32_t g = f + 1; g < faces; ++g) {
+      const std::uint32_t a = scratch[2 * f], b = scratch[2 * f + 1], c = scratch[2 * g], e = scratch[2 * g + 1];
+      if (a == c || a == e || b == c || b == e) parent[find(f)] = find(g);
+    }
+  for (std::uint32_t f = 0; f < faces; ++f) d += find(f) == f;
+  return d - 1;  // one fan is sound
 }
 
 // Greedy local search: flip tetrahedra around unsound vertices while that
@@ -474,7 +494,42 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   return inside;
 }
 
+// Small components: every face-connected set of at most kBubble tetrahedra
+// with one label, surrounded by the other label (and, for outside sets, not
+// on the hull), takes the other label. Such sets are closed bubbles of
+// surface that touch the rest at vertices at most.
+constexpr std::size_t kBubble = 4;
+
+void remove_bubbles(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside) {
+  const std::size_t nt = dt.tets.size();
+  std::vector<std::uint8_t> seen(nt, 0);
+  std::vector<std::uint32_t> members;
+  std::vector<std::uint32_t> flips;
+  for (std::size_t s0 = 0; s0 < nt; ++s0) {
+    if (seen[s0]) continue;
+    const std::uint8_t label = inside[s0];
+    members.assign(1, static_cast<std::uint32_t>(s0));
+    seen[s0] = 1;
+    bool on_hull = false, small = true;
+    for (std::size_t i = 0; i < members.size(); ++i)
+      for (int k = 0; k < 4; ++k) {
+        const std::uint32_t u = dt.neighbors[members[i]][k];
+        if (u == kNoTet) {
+          on_hull = true;
+          continue;
+        }
+        if (inside[u] != label || seen[u]) continue;
+        seen[u] = 1;
+        members.push_back(u);
+        if (members.size() > kBubble) small = false;
+      }
+    if (small && (label || !on_hull)) flips.insert(flips.end(), members.begin(), members.end());
+  }
+  for (auto t : flips) inside[t] ^= 1;
+}
+
 void repair_labels(const Tetrahedralization& dt, Kind kind, std::vector<std::uint8_t>& inside) {
+  remove_bubbles(dt, inside);
   std::size_t n = 0;
   for (const auto& t : dt.tets)
     for (auto v : t) n = std::max<std::size_t>(n, std::size_t{v} + 1);
