@@ -45,6 +45,7 @@ int cmd_info(int argc, char** argv) {
       j.begin_object();
       j.key("level").value(l.lod).key("points").value(l.points).key("new_points").value(l.new_points);
       j.key("layer_bytes").value(l.layer_bytes).key("stream_bytes").value(l.stream_bytes);
+      j.key("coder").value(l.coder);
       j.end_object();
     }
     j.end_array().end_object();
@@ -59,13 +60,16 @@ int cmd_info(int argc, char** argv) {
   for (const auto& c : s.chunks)
     std::printf("%6s %10llu %10u  %s%s\n", c.type.c_str(), static_cast<unsigned long long>(c.offset), c.length,
                 c.critical ? "critical" : "ancillary", c.known ? "" : ", unknown (skipped)");
-  std::printf("\nlevels (coarsest first):\n%6s %10s %10s %12s %12s %12s\n", "level", "points", "new", "layer bytes",
-              "prefix bytes", "bits/point");
-  for (const auto& l : s.levels)
-    std::printf("%6d %10llu %10llu %12llu %12llu %12.3f\n", l.lod, static_cast<unsigned long long>(l.points),
+  std::printf("\nlevels (coarsest first):\n%6s %10s %10s %12s %12s %12s  %s\n", "level", "points", "new", "layer bytes",
+              "prefix bytes", "bits/point", "coder");
+  for (std::size_t i = 0; i < s.levels.size(); ++i) {
+    const auto& l = s.levels[i];
+    std::printf("%6d %10llu %10llu %12llu %12llu %12.3f  %s\n", l.lod, static_cast<unsigned long long>(l.points),
                 static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
                 static_cast<unsigned long long>(l.stream_bytes),
-                8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points));
+                8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points),
+                i == 0 ? "octree" : l.coder == 1 ? "anchored VQ (lossy)" : l.coder == 0 ? "conditional octree" : "unknown");
+  }
   if (s.truncated) std::printf("\nwarning: %s\n", s.warning.c_str());
   return kOk;
 }

@@ -185,7 +185,8 @@ struct Encoded {
   std::vector<std::uint8_t> bytes;
   EncodeReport report;
   /// The finest level's points as the decoder will output them
-  /// (distinct quantized input points, ascending).
+  /// (distinct quantized input points, ascending; with lossy refinement
+  /// layers, their decoded approximations).
   std::vector<GridPoint> points;
   /// The finest level's connectivity as the decoder will rebuild it
   /// (indices into `points`): triangles for surfaces, tetrahedra for volumes.

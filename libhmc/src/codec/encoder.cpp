@@ -148,7 +148,10 @@ std::vector<std::uint32_t> index_in(const std::vector<GridPoint>& points, const 
 
 // Reconstruction side information and result for one level. `fine_index`
 // maps each finest input point to its index in the level (~0u: not in it);
-// by default, by equality of the points (levels coded exactly).
+// by default, by equality of the points (levels coded exactly). Given, the
+// level is lossy: its points only approximate the input's, so, like a
+// coarser level, it keeps the rule's labels and corrects what makes the
+// surface unsound, whatever the fidelity.
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
                          Fidelity fidelity, const LevelPlan* finest,
@@ -166,7 +169,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.surface_points = &fine_gp;
   ti.surface = &fine.surface;
   // Coarser levels only approximate the input; exact fidelity still follows it.
-  ti.approximate = coarser && fidelity != Fidelity::exact;
+  ti.approximate = fine_index != nullptr || (coarser && fidelity != Fidelity::exact);
   (void)finest;  // topology targets are not used yet: see tune()
   TuningReport tr;
   plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
@@ -200,6 +203,7 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
   lo.anchors = kVqAnchors;
 
   payloads.assign(plans.size(), {});
+  std::vector<std::vector<std::uint8_t>> octree_payloads(plans.size());  // exact layers coded by coder 1: coder 0's
   std::unordered_map<std::uint64_t, GridPoint> placed;  // input point -> decoded point, lossy layers only
   std::unordered_map<std::uint64_t, bool> dropped;
   bool exact = true;       // every level so far decoded to the input's points
@@ -222,18 +226,19 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
     if (added.empty()) {  // nothing left of this level
       plans.erase(plans.begin() + static_cast<std::ptrdiff_t>(i));
       payloads.erase(payloads.begin() + static_cast<std::ptrdiff_t>(i));
+      octree_payloads.erase(octree_payloads.begin() + static_cast<std::ptrdiff_t>(i));
       continue;
     }
     std::vector<std::uint8_t>& payload = payloads[i];
     payload.push_back(static_cast<std::uint8_t>(RefineCoder::anchored_vq));
     payload.insert(payload.end(), layer.bytes.begin(), layer.bytes.end());
     if (exact && layer_exact) {
-      // Both coders are exact here: keep the smaller.
+      // Both coders are exact here: keep the smaller (and the other, in
+      // case the codebook costs more than coder 1 saves: see below).
       std::vector<std::uint8_t> octree = encode_refinement(decoded, plan.added, q);
-      if (octree.size() < layer.bytes.size()) {
-        payload.assign(1, static_cast<std::uint8_t>(RefineCoder::conditional_octree));
-        payload.insert(payload.end(), octree.begin(), octree.end());
-      }
+      octree.insert(octree.begin(), static_cast<std::uint8_t>(RefineCoder::conditional_octree));
+      if (octree.size() < payload.size()) std::swap(octree, payload);
+      if (payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq)) octree_payloads[i] = std::move(octree);
     }
     const bool lossy_layer = payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq);
     vq_used = vq_used || lossy_layer;
@@ -269,6 +274,20 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
     plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options.fidelity, i > 0 ? &plans.front() : nullptr,
                         &idx);
     lr.simplices = kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
+  }
+  // Every layer exact: coder 1 must also pay for the codebook.
+  if (exact && vq_used) {
+    std::size_t saved = 0;
+    for (std::size_t i = 0; i < payloads.size(); ++i)
+      if (!octree_payloads[i].empty()) saved += octree_payloads[i].size() - payloads[i].size();
+    if (saved <= write_vector_quantizer(vq).size() + kChunkOverhead) {
+      for (std::size_t i = 0; i < payloads.size(); ++i)
+        if (!octree_payloads[i].empty()) {
+          payloads[i] = std::move(octree_payloads[i]);
+          plans[i].report.coder = 0;
+        }
+      vq_used = false;
+    }
   }
   for (std::size_t k = 0; k < plans.size(); ++k) plans[k].report.lod = static_cast<int>(k);
   return vq_used ? vq : VectorQuantizer{};
