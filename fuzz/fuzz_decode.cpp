@@ -68,6 +68,8 @@ void check_stream(const std::uint8_t* data, std::size_t size) {
   options.limits.max_points = std::uint64_t{1} << 18;
   options.limits.max_levels = 64;
   options.limits.max_bytes = std::uint64_t{1} << 24;
+  // 64 MiB: at most about 400,000 tetrahedra, however the points lie.
+  options.limits.max_memory = std::uint64_t{1} << 26;
   const bool can_reconstruct = hmc_fuzz::set_reconstruct(options, false);
 
   const auto dec = hmc::decode(data, size, options);

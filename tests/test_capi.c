@@ -440,6 +440,18 @@ static void test_limits_and_misuse(void) {
   CHECK_STATUS(hmc_decoder_feed(d, bytes, size), HMC_LIMIT_EXCEEDED);
   hmc_decoder_destroy(d);
 
+  /* Working memory: 2 GiB by default; 64 KiB cannot hold the torus' tetrahedra. */
+  d = hmc_decoder_create(NULL);
+  CHECK(hmc_decoder_memory_limit(d) == ((uint64_t)1 << 31));
+  CHECK(hmc_decoder_memory_limit(NULL) == 0);
+  CHECK_STATUS(hmc_decoder_set_memory_limit(NULL, 1), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_decoder_set_memory_limit(d, (uint64_t)1 << 16), HMC_OK);
+  CHECK(hmc_decoder_memory_limit(d) == ((uint64_t)1 << 16));
+  CHECK_STATUS(hmc_decoder_decode(d, bytes, size), HMC_LIMIT_EXCEEDED);
+  CHECK(strstr(hmc_decoder_message(d), "memory limit") != NULL);
+  CHECK_STATUS(hmc_decoder_set_memory_limit(d, (uint64_t)1 << 31), HMC_INVALID_ARGUMENT);
+  hmc_decoder_destroy(d);
+
   d = hmc_decoder_create(NULL);
   CHECK_STATUS(hmc_decoder_set_limits(d, (uint64_t)1 << 26, 64, size - 1), HMC_OK);
   CHECK_STATUS(hmc_decoder_feed(d, bytes, size - 1), HMC_OK);

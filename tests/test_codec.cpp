@@ -304,10 +304,14 @@ TEST_CASE("hand-made malformed streams get their error class") {
     CHECK(decode_status(c.bytes()) == Status::bad_header);
     c.list[0].second = head({1000000000}, 1);
     CHECK(decode_status(c.bytes()) == Status::limit_exceeded);
-    // Raising the limit: the stream is still refused, without allocating a
-    // billion points (the octree runs out of bits or does not match).
+    // Raising the points limit: the memory limit refuses a billion points
+    // (32 GB) before decoding; raising that too, the stream is still
+    // refused, without allocating a billion points (the octree runs out of
+    // bits or does not match).
     DecodeOptions big;
     big.limits.max_points = 1ull << 40;
+    CHECK(decode_status(c.bytes(), big) == Status::limit_exceeded);
+    big.limits.max_memory = 1ull << 40;
     CHECK(decode_status(c.bytes(), big) == Status::bad_layer);
     ScalarQuantizer q1;
     q1.bits = 1;
@@ -397,6 +401,52 @@ TEST_CASE("limits: stream size") {
   DecodeOptions o;
   o.limits.max_bytes = b.size() - 1;
   CHECK(decode_status(b, o) == Status::limit_exceeded);
+}
+
+TEST_CASE("limits: working memory, including a tetrahedralization quadratic in its points") {
+  // 2 x 300 points on two skew lines: a stream of about a kilobyte whose
+  // Delaunay tetrahedralization has 299^2 = 89,401 tetrahedra.
+  Mesh lines;
+  for (int i = 0; i < 300; ++i) lines.points.push_back({30.0 * i, 0, 0});
+  for (int j = 0; j < 300; ++j) lines.points.push_back({0, 30.0 * j, 9000});
+  EncodeOptions eo;
+  eo.bits = 14;
+  eo.kind = Kind::surface;
+  auto e = encode(lines, eo);
+  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  const auto& b = e.value().bytes;
+  CHECK(b.size() < 2000);
+  auto d = decode(b.data(), b.size());
+  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  CHECK(d.value().finest().points.size() == 600);
+
+  // 89,401 tetrahedra at 160 bytes are about 14 MB: 8 MiB is refused, while
+  // the tetrahedralization is being built (the native backend; TetGen's
+  // worst case, 600 * 597 / 2 tetrahedra, does not fit), not after.
+  DecodeOptions small;
+  small.limits.max_memory = 8u << 20;
+  auto r = decode(b.data(), b.size(), small);
+  REQUIRE(!r.ok());
+  CHECK(r.error().status == Status::limit_exceeded);
+  CHECK(r.error().message.find("delaunay") != std::string::npos);
+  // Points only: no tetrahedralization, so 8 MiB is plenty.
+  small.reconstruct = false;
+  CHECK(decode_status(b, small) == Status::ok);
+  // 64 MiB: the native backend runs with room to spare and gives the same
+  // simplices as TetGen under the default limit.
+  DecodeOptions roomy;
+  roomy.limits.max_memory = 64u << 20;
+  auto r2 = decode(b.data(), b.size(), roomy);
+  REQUIRE_MESSAGE(r2.ok(), r2.error().to_string());
+  CHECK(r2.value().finest().triangles == d.value().finest().triangles);
+  // A limit below the points' own share refuses the level before decoding it.
+  DecodeOptions tiny;
+  tiny.limits.max_memory = 600 * 32 - 1;
+  tiny.reconstruct = false;
+  auto r3 = decode(b.data(), b.size(), tiny);
+  REQUIRE(!r3.ok());
+  CHECK(r3.error().status == Status::limit_exceeded);
+  CHECK(r3.error().message.find("level 0 (600 points)") != std::string::npos);
 }
 
 TEST_CASE("inspect lists chunks and levels without decoding layers") {

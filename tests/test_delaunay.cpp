@@ -372,6 +372,32 @@ TEST_CASE("TetGen and the native backend build the same tetrahedra") {
   }
 }
 
+TEST_CASE("a tetrahedra budget stops quadratic tetrahedralizations early") {
+  // n points on two skew lines: (n/2 - 1)^2 tetrahedra.
+  std::vector<GridPoint> p;
+  for (std::uint32_t i = 0; i < 200; ++i) p.push_back({10 * i, 0, 0});
+  for (std::uint32_t j = 0; j < 200; ++j) p.push_back({0, 10 * j, 5000});
+  p = canonical(p);
+  CHECK(max_delaunay_tets(4) == 2);
+  CHECK(max_delaunay_tets(400) == 400 * 397 / 2);
+  CHECK(max_delaunay_tets(std::uint64_t{1} << 40) == ~std::uint64_t{0});
+  const auto full = delaunay(p);  // unlimited: TetGen
+  CHECK(full.tets.size() == 199 * 199);
+  // A budget under TetGen's worst case but above the real size: the native
+  // backend, same tetrahedra.
+  CHECK(delaunay(p, 50000).tets == full.tets);
+  try {
+    (void)delaunay(p, 20000);
+    FAIL("no limit_exceeded");
+  } catch (const StreamError& e) {
+    CHECK(e.error().status == Status::limit_exceeded);
+  }
+  // Ordinary sets are not affected by a budget a few times their size.
+  const auto ball = quantize(samples::random_ball(3000, 8), 10);
+  const auto t = delaunay(ball);
+  CHECK(delaunay(ball, 4 * t.tets.size()).tets == t.tets);
+}
+
 TEST_CASE("large coordinates: the native backend, and no TetGen hazards") {
   // TetGen is not run when a coordinate extent reaches 2^16 (its first
   // tetrahedron is chosen in floating point); delaunay() still answers.

@@ -25,18 +25,21 @@ Mesh level_mesh(const Decoded& d, const DecodedLevel& level) {
 
 int cmd_dec(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--points-only"},
-         {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels"});
+         {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels", "--max-memory"});
   DecodeOptions opt;
   opt.finest_level = static_cast<int>(a.get_int("--level", 0, 0, 63));
   opt.limits.max_points = static_cast<std::uint64_t>(
       a.get_int("--max-points", static_cast<long long>(opt.limits.max_points), 1, 1ll << 40));
   opt.limits.max_levels = static_cast<std::uint32_t>(a.get_int("--max-levels", 64, 1, 64));
+  opt.limits.max_memory = static_cast<std::uint64_t>(a.get_int(
+                              "--max-memory", static_cast<long long>(opt.limits.max_memory >> 20), 1, 1ll << 30))
+                          << 20;
   opt.reconstruct = !a.flag("--points-only");
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
   if (!a.ok() || a.positional().size() != 1) {
     std::fprintf(stderr,
                  "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR [--ext EXT]] [--canonical DIR]\n"
-                 "                  [--points-only] [--max-points N] [--max-levels N] [--json]\n",
+                 "                  [--points-only] [--max-points N] [--max-levels N] [--max-memory MIB] [--json]\n",
                  a.ok() ? "need one input stream" : a.error().c_str());
     return kUsage;
   }

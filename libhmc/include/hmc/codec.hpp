@@ -206,6 +206,15 @@ struct DecodeLimits {
   std::uint64_t max_points = std::uint64_t{1} << 26;  ///< points of the finest level
   std::uint32_t max_levels = 64;                      ///< levels declared
   std::uint64_t max_bytes = std::uint64_t{1} << 32;   ///< stream size
+  /// Approximate working memory of one decode, in bytes: the decoded levels'
+  /// points and simplices plus the Delaunay tetrahedralization and the
+  /// reconstruction of the level being rebuilt (the decoder counts 32 bytes
+  /// per point and 160 per tetrahedron, what it measures at peak). A level
+  /// that would need more fails with limit_exceeded before the memory is
+  /// allocated; so does a Delaunay tetrahedralization that turns out larger
+  /// than the rest allows (n points can have up to n(n-3)/2 tetrahedra).
+  /// 2 GiB rebuilds surfaces of about 1.5 million points.
+  std::uint64_t max_memory = std::uint64_t{1} << 31;
 };
 
 /// Decoder settings.

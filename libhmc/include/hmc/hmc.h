@@ -302,6 +302,27 @@ HMC_API hmc_status hmc_decoder_set_limits(hmc_decoder *decoder, uint64_t max_poi
                                           uint64_t max_bytes);
 
 /**
+ * Cap the decoder's working memory: the decoded levels' points and
+ * simplices plus the Delaunay tetrahedralization and reconstruction of the
+ * level being rebuilt, counted as 32 bytes per point and 160 per
+ * tetrahedron. A level that needs more fails with ::HMC_LIMIT_EXCEEDED
+ * before the memory is allocated, including a level whose points have an
+ * unusually large tetrahedralization (n points can have n(n-3)/2
+ * tetrahedra). The default, 2^31 bytes, rebuilds surfaces of about 1.5
+ * million points. Only before the first hmc_decoder_feed() or
+ * hmc_decoder_decode().
+ * @param decoder    the decoder
+ * @param max_memory the cap in bytes
+ * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT when decoding has begun
+ */
+HMC_API hmc_status hmc_decoder_set_memory_limit(hmc_decoder *decoder, uint64_t max_memory);
+
+/** The decoder's memory cap in bytes (hmc_decoder_set_memory_limit()).
+ *  @param decoder the decoder
+ *  @return the cap, or 0 when `decoder` is NULL */
+HMC_API uint64_t hmc_decoder_memory_limit(const hmc_decoder *decoder);
+
+/**
  * The decoder's limits.
  * @param decoder         the decoder
  * @param[out] max_points receives the points limit, or NULL

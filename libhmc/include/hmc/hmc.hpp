@@ -199,6 +199,10 @@ class Decoder {
   Result<Done> set_limits(std::uint64_t max_points, std::uint32_t max_levels, std::uint64_t max_bytes) {
     return check(hmc_decoder_set_limits(h_.get(), max_points, max_levels, max_bytes));
   }
+  /// Memory cap, before decoding begins (hmc_decoder_set_memory_limit()).
+  Result<Done> set_memory_limit(std::uint64_t max_memory) {
+    return check(hmc_decoder_set_memory_limit(h_.get(), max_memory));
+  }
   /// Stop after this level (hmc_decoder_set_finest_level()).
   Result<Done> set_finest_level(int level) { return check(hmc_decoder_set_finest_level(h_.get(), level)); }
   /// When defects are reported when feeding (hmc_decoder_set_error_order()).

@@ -289,6 +289,19 @@ hmc_status hmc_decoder_set_limits(hmc_decoder* decoder, uint64_t max_points, uin
   });
 }
 
+hmc_status hmc_decoder_set_memory_limit(hmc_decoder* decoder, uint64_t max_memory) {
+  if (!decoder) return HMC_INVALID_ARGUMENT;
+  return guard(decoder->message, [&]() -> hmc_status {
+    if (decoder->begun()) return decoder->misuse("limits must be set before decoding begins");
+    decoder->options.limits.max_memory = max_memory;
+    return HMC_OK;
+  });
+}
+
+uint64_t hmc_decoder_memory_limit(const hmc_decoder* decoder) {
+  return decoder ? decoder->options.limits.max_memory : 0;
+}
+
 hmc_status hmc_decoder_get_limits(const hmc_decoder* decoder, uint64_t* max_points, uint32_t* max_levels,
                                   uint64_t* max_bytes) {
   if (!decoder) return HMC_INVALID_ARGUMENT;

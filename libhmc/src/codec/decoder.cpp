@@ -117,6 +117,15 @@ void check_size(std::size_t size, const DecodeLimits& limits) {
                                      std::to_string(limits.max_bytes));
 }
 
+// The decoder's memory accounting (DecodeLimits::max_memory): bytes per
+// point of a level being decoded (kept points, the coarser level's copy and
+// the added points), per tetrahedron of a Delaunay tetrahedralization being
+// built and reconstructed (peak resident set, measured: about 125-160), and
+// per kept output simplex.
+constexpr std::uint64_t kPointBytes = 32;
+constexpr std::uint64_t kTetBytes = 160;
+constexpr std::uint64_t kSimplexBytes = 16;
+
 std::string truncation_warning(const ContainerView& view, const ChunkWalker& walk) {
   std::string why = view.truncated ? view.truncation : "the stream ends before HEND";
   return why + "; decoded " + std::to_string(walk.complete()) + " of " +
@@ -134,6 +143,16 @@ struct ChunkDecoder::State {
   Decoded out;
   std::optional<DecodedLevel> pending;  // a level whose points are decoded, waiting for its RCON
   std::vector<GridPoint> previous_points;  // the last decoded level's points
+  std::uint64_t memory = 0;                // bytes counted against limits.max_memory by the kept levels
+
+  // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
+  void reserve(std::uint64_t bytes, const std::string& what) const {
+    const std::uint64_t max = options.limits.max_memory;
+    if (bytes > max || memory > max - bytes)
+      fail(Status::limit_exceeded, what + " needs about " + std::to_string(bytes) + " bytes, and " +
+                                       std::to_string(memory) + " are in use, over the memory limit of " +
+                                       std::to_string(max));
+  }
 };
 
 ChunkDecoder::ChunkDecoder(const DecodeOptions& options) : s_(std::make_unique<State>(options)) {}
@@ -167,6 +186,7 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
       if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
       DecodedLevel level;
       level.lod = static_cast<int>(counts.size() - 1 - k);
+      s_->reserve(counts[k] * kPointBytes, "level " + std::to_string(level.lod) + " (" + std::to_string(counts[k]) + " points)");
       if (k == 0) {
         if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
           fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
@@ -189,6 +209,7 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
       }
       level.stream_bytes = c.offset + kChunkOverhead + c.length;
       previous_points = level.points;
+      s_->memory += level.points.size() * sizeof(GridPoint);
       if (walk.needs_recon()) {
         pending = std::move(level);
       } else {
@@ -200,10 +221,16 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
       if (!pending) break;  // a level after the requested one
       const ReconParams params = read_recon(c, pending->points.size());
       if (options.reconstruct) {
-        const auto dt = delaunay(pending->points);
+        const std::uint64_t n = pending->points.size();
+        const std::string what = "the reconstruction of level " + std::to_string(pending->lod) + " (" +
+                                 std::to_string(n) + " points)";
+        s_->reserve(n * kPointBytes, what);
+        const std::uint64_t room = options.limits.max_memory - s_->memory - n * kPointBytes;
+        const auto dt = delaunay(pending->points, room / kTetBytes);
         auto rec = reconstruct(pending->points, dt, walk.header->kind, params);
         pending->triangles = std::move(rec.triangles);
         pending->tetrahedra = std::move(rec.tetrahedra);
+        s_->memory += (pending->triangles.size() + pending->tetrahedra.size()) * kSimplexBytes;
       }
       pending->stream_bytes = c.offset + kChunkOverhead + c.length;
       out.levels.push_back(std::move(*pending));

@@ -241,7 +241,13 @@ std::string certificate_error(const std::vector<GridPoint>& points, const TetLis
   return check(points, canon, nb);
 }
 
-Tetrahedralization delaunay(const std::vector<GridPoint>& points) {
+std::uint64_t max_delaunay_tets(std::uint64_t n) {
+  if (n < 4) return 0;
+  if (n > (std::uint64_t{1} << 32)) return ~std::uint64_t{0};
+  return n * (n - 3) / 2;
+}
+
+Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& p = points[i];
     if (p[0] >= kCoordLimit || p[1] >= kCoordLimit || p[2] >= kCoordLimit)
@@ -255,7 +261,9 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points) {
 
   TetList tets, nb;
   std::string error = "TetGen not applicable";
-  if (backend::tetgen(points, tets, nb)) {
+  const bool bounded = max_delaunay_tets(points.size()) <= max_tets;
+  if (!bounded) error = "TetGen not run: its worst case exceeds the limit of " + std::to_string(max_tets) + " tetrahedra";
+  if (bounded && backend::tetgen(points, tets, nb)) {
     error = verify_backend_output(points, tets, nb);
     if (error.empty()) {
       out.tets = std::move(tets);
@@ -265,7 +273,8 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points) {
   }
   tets.clear();
   nb.clear();
-  backend::native(points, tets, nb);
+  const std::uint64_t hull = 2 * static_cast<std::uint64_t>(points.size()) + 8;  // hull faces: at most 2n - 4
+  backend::native(points, tets, nb, max_tets > ~std::uint64_t{0} - hull ? ~std::uint64_t{0} : max_tets + hull);
   const std::string native_error = verify_backend_output(points, tets, nb);
   if (!native_error.empty())
     fail(Status::internal_error, "delaunay: no backend produced a verified tetrahedralization (TetGen: " + error +

@@ -67,8 +67,22 @@ struct Tetrahedralization {
 /// (ascending x, then y, then z); fails with internal_error otherwise.
 /// Fewer than 4 points, or all points coplanar: no tetrahedra. Otherwise
 /// every point is a vertex of some tetrahedron and the tetrahedra tile the
-/// convex hull. Errors (as StreamError): out_of_memory, internal_error.
-Tetrahedralization delaunay(const std::vector<GridPoint>& points);
+/// convex hull. Errors (as StreamError): out_of_memory, internal_error, and
+/// limit_exceeded (below).
+///
+/// `max_tets` bounds the work on untrusted points. n points can have up to
+/// n(n-3)/2 Delaunay tetrahedra (points on two skew lines come close), so a
+/// few kilobytes of stream can ask for billions; TetGen cannot be stopped
+/// midway, so it is used only when that worst case is within `max_tets`
+/// (always, by default). Otherwise the native backend builds the same
+/// canonical tetrahedralization and fails with limit_exceeded as soon as it
+/// would need more than max_tets tetrahedra (plus the hull faces).
+Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets = ~std::uint64_t{0});
+
+/// n(n-3)/2, the most tetrahedra a Delaunay tetrahedralization of n >= 4
+/// points can have (the upper bound theorem applied to the lifted points;
+/// saturating).
+std::uint64_t max_delaunay_tets(std::uint64_t n);
 
 /// Verifies that `tets` (any vertex order per tetrahedron, any list order)
 /// is the canonical Delaunay tetrahedralization of `points` (spec/
@@ -97,9 +111,11 @@ namespace backend {
 bool tetgen(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
             std::vector<std::array<std::uint32_t, 4>>& neighbors);
 
-/// The built-in exact incremental construction (native_backend.cpp).
+/// The built-in exact incremental construction (native_backend.cpp). Fails
+/// with limit_exceeded, before allocating more, when more than `max_cells`
+/// cells (tetrahedra plus convex-hull faces) would be alive at once.
 void native(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
-            std::vector<std::array<std::uint32_t, 4>>& neighbors);
+            std::vector<std::array<std::uint32_t, 4>>& neighbors, std::uint64_t max_cells = ~std::uint64_t{0});
 }  // namespace backend
 
 }  // namespace hmc::detail

@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <random>
+#include <string>
 
 #include "delaunay/delaunay.hpp"
 #include "delaunay/predicates.hpp"
@@ -42,7 +43,8 @@ struct Cell {
 
 class Builder {
  public:
-  explicit Builder(const std::vector<GridPoint>& pts) : p_(pts), inf_(static_cast<std::uint32_t>(pts.size())) {}
+  Builder(const std::vector<GridPoint>& pts, std::uint64_t max_cells)
+      : p_(pts), inf_(static_cast<std::uint32_t>(pts.size())), max_cells_(max_cells) {}
 
   void run(std::vector<std::array<std::uint32_t, 4>>& tets, std::vector<std::array<std::uint32_t, 4>>& nb) {
     auto order = insertion_order();
@@ -54,6 +56,7 @@ class Builder {
  private:
   const std::vector<GridPoint>& p_;
   const std::uint32_t inf_;
+  const std::uint64_t max_cells_;  // most cells (finite and hull) alive at once
   std::vector<Cell> cells_;
   std::vector<std::uint32_t> free_;
   std::vector<std::uint32_t> mark_;  // per cell: stamp_ = in conflict, stamp_ + 1 = tested, not in conflict
@@ -108,6 +111,10 @@ class Builder {
       c = free_.back();
       free_.pop_back();
     } else {
+      if (cells_.size() >= max_cells_)
+        fail(Status::limit_exceeded, "delaunay: the tetrahedralization of " + std::to_string(p_.size()) +
+                                         " points needs more than " + std::to_string(max_cells_) +
+                                         " cells, over the memory limit");
       c = static_cast<std::uint32_t>(cells_.size());
       cells_.push_back({});
       mark_.push_back(0);
@@ -300,8 +307,8 @@ class Builder {
 }  // namespace
 
 void native(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
-            std::vector<std::array<std::uint32_t, 4>>& neighbors) {
-  Builder(points).run(tets, neighbors);
+            std::vector<std::array<std::uint32_t, 4>>& neighbors, std::uint64_t max_cells) {
+  Builder(points, max_cells).run(tets, neighbors);
 }
 
 }  // namespace hmc::detail::backend
