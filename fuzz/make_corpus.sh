@@ -36,6 +36,26 @@ for spec in ball3:ball:3 ball40:ball:40 lattice64:lattice:64 sphere100:sphere:10
   done
 done
 
+# Small multi-level streams, exact and lossy, with their canonical dumps:
+# seeds for the layer and RCON targets (cut out below) and for decode.
+for spec in ball64:ball:64:volume sphere90:sphere:90:surface sphere50:sphere:50:surface ball36:ball:36:volume \
+            sphere36:sphere:36:surface; do
+  name=${spec%%:*}
+  rest=${spec#*:}
+  gen=${rest%%:*}
+  rest=${rest#*:}
+  "$HMC" gen "$gen" --vertices "${rest%%:*}" --seed 3 -o "$WORK/$name.ply" >/dev/null
+  for variant in exact:: vq3:--vq-bits=3 vq4r2:--vq-bits=4:--vq-residual=2; do
+    tag=${variant%%:*}
+    opts=$(echo "${variant#*:}" | tr ':=' '  ')
+    levels=2
+    case $name in *36) levels=1; [ "$tag" = exact ] || continue ;; esac
+    # shellcheck disable=SC2086
+    "$HMC" enc "$WORK/$name.ply" -o "$WORK/$name-$tag.hmc" --bits 8 --kind "${rest#*:}" --levels $levels --no-info \
+      --canonical "$WORK/$name-$tag.dump" $opts >/dev/null
+  done
+done
+
 rm -rf "$CORPUS"
 mkdir -p "$CORPUS"
 python3 - "$WORK" "$CORPUS" <<'EOF'
@@ -215,6 +235,60 @@ b.put(0xFFFF, 16); b.put(0xFFFF, 16); b.put(0b1110, 4)
 put("huffman", "long-codes", huff_input(16, b.bytes()))
 b = Bits(); b.put(0, 1); b.put(0, 4); b.put(0, 31); b.put(1, 1)
 put("huffman", "ue-31-zeros", huff_input(65536, b.bytes()))
+
+# --- refine_layer, vq_layer, recon: cut from the small streams -----------
+def dump_points(path):
+    with open(path) as f:
+        return [tuple(int(v) for v in line.split()) for line in f if line.strip()]
+
+def u24s(pts):
+    return b"".join(b"".join((v & 0xFFFFFF).to_bytes(3, "little") for v in p) for p in pts)
+
+def svarints(data, pos):
+    value, shift = 0, 0
+    while True:
+        b = data[pos]
+        pos += 1
+        value |= (b & 0x7F) << shift
+        shift += 7
+        if b < 0x80:
+            break
+    return (value >> 1) ^ -(value & 1), value, pos
+
+for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
+    name = os.path.basename(path)[:-4]
+    dump = os.path.join(work, name + ".dump")
+    if not os.path.isdir(dump):
+        continue
+    cs = chunks(streams[name])
+    kind = cs[0][1][0]
+    q = next(p for t, p in cs if t == "SQNT")[0]
+    refn = [p for t, p in cs if t == "REFN"]
+    rcon = [p for t, p in cs if t == "RCON"]
+    if refn:
+        coarse = dump_points(os.path.join(dump, "level-1.points"))
+        fine = dump_points(os.path.join(dump, "level-0.points"))
+        n = len(fine) - len(coarse)
+        if len(coarse) > 64:
+            continue
+        common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
+        if refn[0][0] == 0:
+            put("refine_layer", name, common + (n - 1).to_bytes(2, "little") + refn[0][1:])
+        else:
+            vqtb = next(p for t, p in cs if t == "VQTB")
+            _, k, pos = svarints(vqtb, 1)  # the size is an unsigned varint: its raw value
+            entries = []
+            for _ in range(3 * k):
+                v, _, pos = svarints(vqtb, pos)
+                entries.append(v)
+            if k > 32:
+                continue
+            cb = b"".join((v & 0xFFFFFF).to_bytes(3, "little") for v in entries)
+            put("vq_layer", name, common + bytes([k - 1]) + cb + (n - 1).to_bytes(2, "little") + refn[0][1:])
+    if rcon and q == 8:
+        pts = dump_points(os.path.join(dump, "level-0.points"))
+        if 4 <= len(pts) <= 40:
+            put("recon", name, bytes([1 if kind == 2 else 0, len(pts) - 4]) + bytes(v for p in pts for v in p) + rcon[-1])
 
 # --- roundtrip: q - 1, flags, seed, then 12 bytes per point --------------
 def rt(q, flags, seed, coords, fmt):
