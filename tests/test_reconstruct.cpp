@@ -232,6 +232,21 @@ TEST_CASE("a volume comes back as the input's solid") {
     CHECK(out6 == doctest::Approx(6.0 * 33 * 3));
     CHECK(lvl.triangles.empty());
   }
+
+  // Triangles listed beside the tetrahedra (a MEDIT file's boundary
+  // markers or interfaces, here interior faces that are not its boundary)
+  // do not change what the encoder aims at: the solid's own boundary.
+  Mesh marked = m;
+  for (std::size_t i = 0; i < m.tetrahedra.size(); i += 3) {
+    const auto& t = m.tetrahedra[i];
+    marked.triangles.push_back({t[0], t[1], t[2]});
+  }
+  for (Fidelity f : {Fidelity::rule, Fidelity::shape}) {
+    Encoded plain, with_triangles;
+    roundtrip(m, f, &plain, 3);
+    roundtrip(marked, f, &with_triangles, 3);
+    CHECK(with_triangles.bytes == plain.bytes);
+  }
 }
 
 TEST_CASE("points-only decoding skips reconstruction but keeps the points") {

@@ -57,7 +57,19 @@ InputOnGrid input_on_grid(const Mesh& input, const std::vector<GridPoint>& quant
   InputOnGrid g;
   std::vector<Vec3> gp(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) gp[i] = {double(points[i][0]), double(points[i][1]), double(points[i][2])};
-  if (!input.triangles.empty()) {
+  // Tetrahedra win over triangles: a volume file (MEDIT, Gmsh) may also
+  // list triangles (boundary markers, internal interfaces), which need not
+  // be its boundary.
+  if (!input.tetrahedra.empty()) {
+    std::vector<Tetrahedron> tets;
+    for (const auto& t : input.tetrahedra) {
+      const Tetrahedron f{idx[t[0]], idx[t[1]], idx[t[2]], idx[t[3]]};
+      auto s = f;
+      std::sort(s.begin(), s.end());
+      if (s[0] != s[1] && s[1] != s[2] && s[2] != s[3]) tets.push_back(f);
+    }
+    g.surface = boundary_faces(gp, tets);
+  } else if (!input.triangles.empty()) {
     for (const auto& t : input.triangles) {
       const Triangle f{idx[t[0]], idx[t[1]], idx[t[2]]};
       if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) g.surface.push_back(f);
@@ -81,15 +93,6 @@ InputOnGrid input_on_grid(const Mesh& input, const std::vector<GridPoint>& quant
     }
     std::sort(g.border.begin(), g.border.end());
     g.border.erase(std::unique(g.border.begin(), g.border.end()), g.border.end());
-  } else if (!input.tetrahedra.empty()) {
-    std::vector<Tetrahedron> tets;
-    for (const auto& t : input.tetrahedra) {
-      const Tetrahedron f{idx[t[0]], idx[t[1]], idx[t[2]], idx[t[3]]};
-      auto s = f;
-      std::sort(s.begin(), s.end());
-      if (s[0] != s[1] && s[1] != s[2] && s[2] != s[3]) tets.push_back(f);
-    }
-    g.surface = boundary_faces(gp, tets);
   }
   return g;
 }
