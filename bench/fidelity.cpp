@@ -4,6 +4,13 @@
 // connectivity with the input's own. Prints one JSON object.
 //
 // usage: fidelity MODEL [--bits Q] [--fidelity rule|shape|exact]
+//                       [--levels L] [--vq-bits B] [--vq-residual S]
+//
+// With --levels or --vq-bits (issue 7, lossy streams) the model goes through
+// the public encoder and decoder instead, with L levels (2 by default) and
+// the refinement layers coded by the anchored vector quantizer with 2^B
+// entries (B = 0: exact). Lossy points are not the input's, so the report
+// compares geometry and topology, not vertex identity: see stream_report().
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -23,6 +30,7 @@
 #include "reconstruct/tuning.hpp"
 #include "reconstruct/distance.hpp"
 #include "reconstruct/winding.hpp"
+#include "util/kdtree.hpp"
 
 using namespace hmc;
 using namespace hmc::detail;
@@ -90,17 +98,200 @@ void topo_json(const char* key, const Topology& t) {
               t.border_edges, t.nonmanifold_edges, t.components, t.euler);
 }
 
+
+double tet_volume(const std::vector<Vec3>& p, const std::vector<Tetrahedron>& ts) {
+  double v = 0;
+  for (const auto& t : ts) {
+    const Vec3 &a = p[t[0]], &b = p[t[1]], &c = p[t[2]], &d = p[t[3]];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
+                 x[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    v += std::abs(u[0] * (w[1] * x[2] - w[2] * x[1]) - u[1] * (w[0] * x[2] - w[2] * x[0]) + u[2] * (w[0] * x[1] - w[1] * x[0])) / 6;
+  }
+  return v;
+}
+
+std::vector<Vec3> to_vec3(const std::vector<GridPoint>& g) {
+  std::vector<Vec3> out(g.size());
+  for (std::size_t i = 0; i < g.size(); ++i) out[i] = {double(g[i][0]), double(g[i][1]), double(g[i][2])};
+  return out;
+}
+
+// End-to-end report on a (possibly lossy) stream: encode with the public
+// API, decode the bytes, and compare the decoder's finest level with the
+// input on the grid. A lossy point is not an input point, so nothing is
+// matched by identity; instead:
+//  - point error: each input grid point to its nearest decoded point and
+//    back (max and RMS, % of the input's box diagonal);
+//  - surface Hausdorff between the rebuilt surface (a volume's boundary)
+//    and the input's, both directions, sampled as in the exact report;
+//  - topology of the rebuilt surface (border and non-manifold edges,
+//    components, Euler characteristic) beside the input's;
+//  - matched share: input triangles (tetrahedra) whose vertices' nearest
+//    decoded points are distinct and form an output triangle (tetrahedron);
+//    with exact layers this is the plain reproduced share (of all input
+//    simplices, not of the Delaunay ceiling);
+//  - whether the decoder rebuilt exactly what the encoder predicted.
+int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int levels, int vq_bits,
+                  std::uint32_t vq_residual) {
+  EncodeOptions opt;
+  opt.bits = q;
+  opt.fidelity = fidelity;
+  opt.levels = levels;
+  opt.vq_bits = vq_bits;
+  opt.vq_residual = vq_residual;
+  opt.write_info = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto enc = encode(m, opt);
+  if (!enc) {
+    std::fprintf(stderr, "encoder: %s\n", enc.error().to_string().c_str());
+    return 3;
+  }
+  const Encoded& e = enc.value();
+  const auto t1 = std::chrono::steady_clock::now();
+  auto dec = decode(e.bytes.data(), e.bytes.size());
+  if (!dec) {
+    std::fprintf(stderr, "the decoder rejects the encoder's stream: %s\n", dec.error().to_string().c_str());
+    return 3;
+  }
+  const auto t2 = std::chrono::steady_clock::now();
+  const DecodedLevel& fin = dec.value().finest();
+  const Kind kind = e.report.kind;
+  const bool same = fin.points == e.points && fin.triangles == e.triangles && fin.tetrahedra == e.tetrahedra;
+
+  // The input on the grid (the encoder's quantizer), duplicates merged.
+  const auto g = quantize(m.points, e.report.quantizer);
+  std::vector<GridPoint> in_pts(g);
+  std::sort(in_pts.begin(), in_pts.end());
+  in_pts.erase(std::unique(in_pts.begin(), in_pts.end()), in_pts.end());
+  std::vector<std::uint32_t> idx(g.size());
+  for (std::size_t i = 0; i < g.size(); ++i)
+    idx[i] = static_cast<std::uint32_t>(std::lower_bound(in_pts.begin(), in_pts.end(), g[i]) - in_pts.begin());
+  std::vector<Face> in_tris;
+  std::vector<Tetrahedron> in_tets;
+  for (const auto& t : m.triangles) {
+    Face f{idx[t[0]], idx[t[1]], idx[t[2]]};
+    if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) in_tris.push_back(f);
+  }
+  for (const auto& t : m.tetrahedra) {
+    Tetrahedron f{idx[t[0]], idx[t[1]], idx[t[2]], idx[t[3]]};
+    auto s = sorted4(f);
+    if (s[0] != s[1] && s[1] != s[2] && s[2] != s[3]) in_tets.push_back(f);
+  }
+  const std::vector<Vec3> in_gp = to_vec3(in_pts), out_gp = to_vec3(fin.points);
+  double diag = 0;
+  for (int a = 0; a < 3; ++a) {
+    double lo = 1e300, hi = -1e300;
+    for (const auto& p : in_gp) lo = std::min(lo, p[a]), hi = std::max(hi, p[a]);
+    diag += (hi - lo) * (hi - lo);
+  }
+  diag = std::sqrt(diag);
+
+  // Point error, and each input point's nearest decoded point.
+  using Tree = KdTree<std::int64_t>;
+  auto ipts = [](const std::vector<GridPoint>& v) {
+    std::vector<Tree::Point> o(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) o[i] = {std::int64_t(v[i][0]), std::int64_t(v[i][1]), std::int64_t(v[i][2])};
+    return o;
+  };
+  const auto in_i = ipts(in_pts), out_i = ipts(fin.points);
+  const Tree out_tree(out_i), in_tree(in_i);
+  std::vector<std::uint32_t> near(in_pts.size());
+  double in_out_max = 0, in_out_sum = 0, out_in_max = 0, out_in_sum = 0;
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < in_i.size(); ++i) {
+    const auto h = out_tree.nearest(in_i[i]);
+    near[i] = h.index;
+    moved += h.d2 != 0;
+    in_out_max = std::max(in_out_max, double(h.d2));
+    in_out_sum += double(h.d2);
+  }
+  for (const auto& p : out_i) {
+    const auto h = in_tree.nearest(p);
+    out_in_max = std::max(out_in_max, double(h.d2));
+    out_in_sum += double(h.d2);
+  }
+  const double pt_haus = std::sqrt(std::max(in_out_max, out_in_max));
+  const double pt_rms = std::sqrt(std::max(in_out_sum / double(in_i.size()), out_in_sum / double(std::max<std::size_t>(out_i.size(), 1))));
+
+  std::uint64_t lossy_points = 0, dropped = 0;
+  for (const auto& l : e.report.levels)
+    if (l.coder == 1) lossy_points += l.new_points, dropped += l.dropped_points;
+  std::printf("{\"model\": \"%s\", \"mode\": \"stream\", \"kind\": \"%s\", \"fidelity\": \"%s\", \"q\": %d, "
+              "\"levels\": %zu, \"vq_bits\": %d, \"vq_residual\": %u, \"codebook\": %llu, \"bytes\": %zu, "
+              "\"input_vertices\": %zu, \"bits_per_input_vertex\": %.3f, \"points_in\": %zu, \"points_out\": %zu, "
+              "\"lossy_points\": %llu, \"dropped_points\": %llu, \"points_moved\": %zu, \"decoder_matches_encoder\": %s, ",
+              path, kind_name(kind), fidelity == Fidelity::rule ? "rule" : fidelity == Fidelity::exact ? "exact" : "shape",
+              q, dec.value().levels.size(), vq_bits, vq_residual,
+              static_cast<unsigned long long>(e.report.codebook_size), e.bytes.size(), m.points.size(),
+              8.0 * double(e.bytes.size()) / double(m.points.size()), in_pts.size(), fin.points.size(),
+              static_cast<unsigned long long>(lossy_points), static_cast<unsigned long long>(dropped), moved,
+              same ? "true" : "false");
+  std::printf("\"point_hausdorff_pct_diag\": %.4f, \"point_rms_pct_diag\": %.5f, ", 100 * pt_haus / diag,
+              100 * pt_rms / diag);
+  auto secs = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+  std::printf("\"seconds\": {\"encode\": %.3f, \"decode\": %.3f}, ", secs(t0, t1), secs(t1, t2));
+
+  // Matched share: input simplices carried by the nearest-point map onto output simplices.
+  auto carried = [&](auto simplex) {
+    for (auto& v : simplex) v = near[v];
+    return simplex;
+  };
+  if (kind == Kind::surface) {
+    std::set<Face> out;
+    for (const auto& f : fin.triangles) out.insert(sorted3(f));
+    std::size_t matched = 0;
+    for (const auto& f : in_tris) matched += out.count(sorted3(carried(f)));
+    std::vector<Face> outv(fin.triangles.begin(), fin.triangles.end());
+    SurfaceDistance to_in(in_gp, in_tris), to_out(out_gp, outv);
+    const double h_out = one_sided(out_gp, outv, to_in), h_in = one_sided(in_gp, in_tris, to_out);
+    std::printf("\"input_triangles\": %zu, \"output_triangles\": %zu, \"matched\": %zu, \"matched_pct\": %.2f, "
+                "\"hausdorff_out_to_in_pct\": %.4f, \"hausdorff_in_to_out_pct\": %.4f, \"hausdorff_pct_diag\": %.4f, ",
+                in_tris.size(), outv.size(), matched, pct(matched, in_tris.size()), 100 * h_out / diag,
+                100 * h_in / diag, 100 * std::max(h_out, h_in) / diag);
+    topo_json("input_topology", topology(in_tris));
+    std::printf(", ");
+    topo_json("output_topology", topology(outv));
+  } else {
+    std::set<Tetrahedron> out;
+    for (const auto& t : fin.tetrahedra) out.insert(sorted4(t));
+    std::size_t matched = 0;
+    for (const auto& t : in_tets) matched += out.count(sorted4(carried(t)));
+    std::vector<Tetrahedron> outv(fin.tetrahedra.begin(), fin.tetrahedra.end());
+    const auto in_bd = boundary_faces(in_gp, in_tets), out_bd = boundary_faces(out_gp, outv);
+    SurfaceDistance to_in(in_gp, in_bd), to_out(out_gp, out_bd);
+    const double h_out = one_sided(out_gp, out_bd, to_in), h_in = one_sided(in_gp, in_bd, to_out);
+    // A volume file may also carry triangles (MEDIT's Triangles section): say so.
+    std::printf("\"input_file_triangles\": %zu, ", m.triangles.size());
+    std::printf("\"input_tets\": %zu, \"output_tets\": %zu, \"matched\": %zu, \"matched_pct\": %.2f, "
+                "\"volume_ratio\": %.5f, \"boundary_hausdorff_out_to_in_pct\": %.4f, "
+                "\"boundary_hausdorff_in_to_out_pct\": %.4f, \"boundary_hausdorff_pct_diag\": %.4f, ",
+                in_tets.size(), outv.size(), matched, pct(matched, in_tets.size()),
+                tet_volume(out_gp, outv) / tet_volume(in_gp, in_tets), 100 * h_out / diag, 100 * h_in / diag,
+                100 * std::max(h_out, h_in) / diag);
+    topo_json("input_boundary_topology", topology(in_bd));
+    std::printf(", ");
+    topo_json("output_boundary_topology", topology(out_bd));
+  }
+  std::printf("}\n");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|shape|exact]\n");
+    std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|shape|exact] [--levels L] [--vq-bits B] "
+                         "[--vq-residual S]\n");
     return 1;
   }
-  int q = 12;
+  int q = 12, levels = 0, vq_bits = -1;
+  long vq_residual = 0;
   Fidelity fidelity = Fidelity::shape;
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--bits") && i + 1 < argc) q = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--levels") && i + 1 < argc) levels = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--vq-bits") && i + 1 < argc) vq_bits = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--vq-residual") && i + 1 < argc) vq_residual = std::atol(argv[++i]);
     if (!std::strcmp(argv[i], "--fidelity") && i + 1 < argc) {
       const std::string f = argv[++i];
       fidelity = f == "rule" ? Fidelity::rule : f == "exact" ? Fidelity::exact : Fidelity::shape;
@@ -112,6 +303,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   const Mesh& m = mesh.value();
+  if (levels > 0 || vq_bits >= 0)
+    return stream_report(argv[1], m, q, fidelity, levels > 0 ? levels : 2, std::max(vq_bits, 0),
+                         static_cast<std::uint32_t>(std::max(vq_residual, 0L)));
   const Kind kind = m.tetrahedra.empty() ? Kind::surface : Kind::volume;
   const auto sq = fit_quantizer(m.points, q);
   const auto g = quantize(m.points, sq);
