@@ -6,7 +6,7 @@ topology of every decoded level, and a check of the thesis' claims.
 
 Writes bench/results/hierarchy.md and bench/results/hierarchy/*.png. Uses only
 the `hmc` command line (analyze, enc, dec, gen, version); the topology, global
-alpha of volumes and the renderings are computed here from the decoded files.
+alpha of the deep runs and the renderings are computed here from the decoded files.
 Needs numpy and matplotlib (Debian: python3-numpy, python3-matplotlib).
 
 usage: bench/hierarchy_report.py [--hmc build/bin/hmc] [--data ../shared/data]
@@ -106,10 +106,9 @@ def model_job(hmc, name, path, kind, work):
         hmc(name, "enc", os.path.join(work, "ball.xyz"), "--kind", "volume", "-o", os.path.join(work, "ball-points.hmc"),
             "--json")
         hmc(name, "dec", os.path.join(work, "ball-points.hmc"), "-o", path, "--json")
-    # Tables. For volumes one level more than shown, so that the coarsest shown
-    # level is decimated too and reports its layers L0, L1, ...; the levels
-    # shown are the same (the encoder plans levels finest first).
-    r["analyze"] = hmc(name, "analyze", path, "--levels", LEVELS + (1 if kind == "volume" else 0), "--json")
+    # Tables 4.1-4.12; for volumes one encode per optimiser (forward, backward,
+    # greedy), each level with its layers L0, L1, ... and both classifications.
+    r["analyze"] = hmc(name, "analyze", path, "--levels", LEVELS, "--json")
     # The default encode at the thesis' depth, decoded level by level, then the
     # encodes with maximal removal for claim (d).
     r["runs"] = {}
@@ -645,6 +644,7 @@ def claims(results):
     raw_best = {o: 0 for o in OPTIMISERS}
     rate_best = {o: 0 for o in OPTIMISERS}
     raw_worst = {o: 0 for o in OPTIMISERS}
+    rate_worst = {o: 0 for o in OPTIMISERS}
     fewest = {o: 0 for o in OPTIMISERS}
     most = {o: 0 for o in OPTIMISERS}
     cells = cases = 0
@@ -673,6 +673,7 @@ def claims(results):
                 raw_best[b] += 1
                 raw_worst[w] += 1
                 rate_best[rb] += 1
+                rate_worst[max(OPTIMISERS, key=lambda o: rate[o])] += 1
                 cells += 1
                 bests.append(b[0])
                 rbests.append(rb[0])
@@ -688,20 +689,27 @@ def claims(results):
            "only partly holds" if any(plural) else "does not hold")
     S.append(f"- **(a) Forward optimisation gives the best quality — {a_v}.** Over 3 volumes × 3 coarser levels × "
              f"QT1–QT4 ({cells} comparisons) the highest mean quality is forward's in {raw_best['forward']}, "
-             f"backward's in {raw_best['backward']}, greedy's in {raw_best['greedy']}; counted per removed vertex "
-             f"(quality lost per 10% of the vertices removed, since the optimisers remove different amounts): "
-             f"forward {rate_best['forward']}, backward {rate_best['backward']}, greedy {rate_best['greedy']}. "
-             f"The differences are small anyway: between the best and the worst optimiser QT1 differs by at most "
-             f"{max(spread):.4f} (median {np.median(spread):.4f}), while level 0 → 3 costs "
-             f"{min(drop[2::3]):.3f}–{max(drop[2::3]):.3f} of QT1.")
+             f"backward's in {raw_best['backward']}, greedy's in {raw_best['greedy']}, and the lowest forward's in "
+             f"{raw_worst['forward']}, backward's in {raw_worst['backward']}, greedy's in {raw_worst['greedy']}. "
+             f"Forward also removes the most vertices (fewest kept in {fewest['forward']} of {cases} model × level "
+             f"cases), so counted per removed vertex (quality lost per 10% of the vertices removed) the smallest "
+             f"loss is forward's in {rate_best['forward']}, backward's in {rate_best['backward']}, greedy's in "
+             f"{rate_best['greedy']}. No optimiser wins consistently, and the differences are small: between the "
+             f"best and the worst optimiser QT1 differs by at most {max(spread):.4f} (median "
+             f"{np.median(spread):.4f}), while going from level 0 to level 3 costs {min(drop[2::3]):.3f}–"
+             f"{max(drop[2::3]):.3f} of QT1.")
     b1 = "holds" if fewest["greedy"] == cases else ("does not hold" if fewest["greedy"] == 0 else "partly holds")
-    b2 = ("holds" if raw_worst["greedy"] == cells else "mostly holds" if raw_worst["greedy"] > cells / 2 else
-          "does not hold" if raw_worst["greedy"] == 0 else "partly holds")
+    raw_w = raw_worst["greedy"] > max(raw_worst[o] for o in OPTIMISERS if o != "greedy")
+    rate_w = rate_worst["greedy"] > max(rate_worst[o] for o in OPTIMISERS if o != "greedy")
+    b2 = ("holds" if raw_w and rate_w else "holds only per removed vertex" if rate_w else
+          "holds only in raw quality" if raw_w else "does not hold")
     S.append(f"- **(b) Greedy removes the most vertices, and its quality suffers — the first half {b1}, the second "
-             f"{b2}.** Of {cases} model × level cases the fewest vertices are kept by forward in {fewest['forward']}, "
-             f"backward in {fewest['backward']}, greedy in {fewest['greedy']}; greedy keeps the *most* in "
-             f"{most['greedy']}. Greedy has the lowest mean quality in {raw_worst['greedy']} of {cells} comparisons "
-             f"(forward {raw_worst['forward']}, backward {raw_worst['backward']})"
+             f"{b2}.** Of {cases} model × level cases greedy keeps the fewest vertices in {fewest['greedy']} and the "
+             f"*most* in {most['greedy']} (fewest: forward {fewest['forward']}, backward {fewest['backward']}). "
+             f"Greedy has the lowest mean quality in {raw_worst['greedy']} of {cells} comparisons (forward "
+             f"{raw_worst['forward']}, backward {raw_worst['backward']}); per removed vertex it loses the most "
+             f"quality in {rate_worst['greedy']} (forward {rate_worst['forward']}, backward "
+             f"{rate_worst['backward']})"
              + (". Greedy takes the whole interior in order of importance, smallest first: deep, high-degree "
                 "vertices, each of which fixes many neighbours, so fewer independent vertices fit."
                 if most["greedy"] > cases / 2 else "."))
@@ -720,13 +728,17 @@ def claims(results):
     bad = []
     for n in SURFACES + VOLUMES:
         r = results[n]
+        series = []
+        if n in VOLUMES:
+            rows = volume_rows(r)
+            series += [(o, "`analyze`", [rows[o][k]["ga"] for k in sorted(rows[o])]) for o in OPTIMISERS]
         for label, run in r["runs"].items():
             if n in SURFACES and label == "default":
-                ga = [row["ga"] for row in sorted(r["analyze"]["levels"], key=lambda x: x["level"])]
-                src = "`analyze`"
+                series.append((label, "`analyze`",
+                               [row["ga"] for row in sorted(r["analyze"]["levels"], key=lambda x: x["level"])]))
             else:
-                ga = [t["ga"] for t in run["stats"]]
-                src = "decoded"
+                series.append((label, "decoded", [t["ga"] for t in run["stats"]]))
+        for label, src, ga in series:
             d = decreases(ga)
             steps += len(ga) - 1
             grow += len(ga) - 1 - len(d)
@@ -751,11 +763,23 @@ def claims(results):
                 + (" All of them are on surfaces, whose reconstruction changes from level to level (long triangles "
                    "and loose pieces come and go, section 3); on the volumes GA grows at every step."
                    if all(b[0] in SURFACES for b in bad) else "")))
+    # How much of the growth is decimation and how much the reconstruction: level 1 with `shape` and `rule`.
+    infl = []
+    for n in SURFACES:
+        st = {lab: results[n]["runs"][lab]["stats"] for lab in ("default", "rule")}
+        if len(st["default"]) > 1 and len(st["rule"]) > 1:
+            infl.append((st["default"][1]["ga"] / st["default"][0]["ga"], st["rule"][1]["ga"] / st["rule"][0]["ga"], n,
+                         st["default"][1]["points"] / st["default"][0]["points"], st["default"][1]["long"]))
+    if infl:
+        g = max(infl)
+        S[-1] += (f" Part of the growth on the surfaces is the reconstruction, not the decimation: from level 0 to 1 "
+                  f"{g[2]}'s GA grows {g[0]:.2f}× with the default `shape` ({g[4]:,} long triangles at level 1) but "
+                  f"{g[1]:.2f}× with `rule`, for about the same share of vertices ({pct(g[3])}).")
     D.append("### (c): global alpha (mean edge length) per level, finest first")
     D.append("")
-    D.append("Surfaces, default run: `ga` of `hmc analyze --json`; all else computed here from the decoded files over "
-             "the unique edges of the triangles or tetrahedra (the same definition; `analyze --json` gives no GA for "
-             "volumes).")
+    D.append("Rows marked `analyze`: `ga` of `hmc analyze IN --levels 4 --json` (surfaces: the default encode; "
+             "volumes: one encode per optimiser); rows marked *decoded*: computed here from the decoded files of "
+             "that run over the unique edges of the triangles or tetrahedra (the same definition).")
     D.append("")
     D.append("| model | run | GA per level | coarsest / finest | decreases (level → level) |")
     D.append("|---|---|---|---|---|")
@@ -819,6 +843,7 @@ def claims(results):
     table = ["| model | input | run | coarsest | same as input down to | first level that differs | "
              "main ok down to |", "|---|---|---|---|---|---|---|"]
     strict_ok, main_ok, parts = 0, 0, []
+    strict_names, main_names = [], []
     for n in SURFACES + VOLUMES:
         mine = [x for x in runs if x["model"] == n]
         for x in mine:
@@ -842,6 +867,10 @@ def claims(results):
         m_ok = reach(bm, "main") <= SHARE_TARGET * 1.05
         strict_ok += s_ok
         main_ok += m_ok
+        if s_ok:
+            strict_names.append(n)
+        if m_ok:
+            main_names.append(n)
         f = bs["fail"]
         if f is None:
             s = f"*{n}*: the input's topology is kept on every level down to {pct(reach(bs, 'strict'))} ({bs['label']})"
@@ -865,12 +894,18 @@ def claims(results):
                 if nxt is not None else ")")
         else:
             s += f"; its main sheet matches down to {pct(reach(bm, 'main'))} ({bm['label']})"
+            if not m_ok and reach(bm, "main") <= SHARE_TARGET * 1.2:
+                s += (f" ({100 * reach(bm, 'main'):.2f}%), just above the {100 * SHARE_TARGET * 1.05:.2f}% cut-off"
+                      + (", where that run stops" if bm["main"] is bm["coarsest"] else ""))
         parts.append(s)
     d_v = "holds" if strict_ok == len(parts) else ("partly holds" if strict_ok else "does not hold")
     S.append(f"- **(d) The topology (components, genus) survives down to about a tenth of the vertices — {d_v}.** "
-             f"Strictly (same components and genus, manifold) on {strict_ok} of {len(parts)} models; looking only at "
-             f"the main sheet, i.e. forgiving pinch points and small loose pieces as long as the main sheet keeps "
-             f"{pct(MAIN_SHARE)} of the vertices, on {main_ok} of {len(parts)}. " + "; ".join(parts) + ".")
+             f"Strictly (same components and genus, every level a manifold, down to at most "
+             f"{pct(SHARE_TARGET * 1.05)} of the vertices in one of the two deep runs) on {strict_ok} of "
+             f"{len(parts)} models" + (f" ({', '.join(strict_names)})" if strict_names else "")
+             + f"; looking only at the main sheet, i.e. forgiving pinch points and small loose pieces as long as the "
+             f"main sheet keeps {pct(MAIN_SHARE)} of the vertices, on {main_ok} of {len(parts)}"
+             + (f" ({', '.join(main_names)})" if main_names else "") + ". " + "; ".join(parts) + ".")
     D.append("Summary per run (shares of the run's level-0 vertices):")
     D.append("")
     D += table
@@ -910,6 +945,32 @@ def observations(results, duplicate_keys):
                  f"on its own reconstruction."
                  + (" So it is what `shape` adds on coarser levels (its label corrections, or the repair of the "
                     "levels it produces) that breaks them." if 5 * extra_rule < extra else ""))
+    # Coarser surface levels: `shape` against `rule`.
+    def total(lab, key):
+        return sum(t[key] for n in SURFACES for t in results[n]["runs"][lab]["stats"][1:])
+    tot = {lab: {k: total(lab, k) for k in ("pieces", "components", "nonmanifold_vertices", "isolated", "long")}
+           for lab in ("default", "rule")}
+    coarse_q = {lab: ", ".join(
+        f"{n} {sorted(results[n]['runs'][lab]['analyze']['levels'], key=lambda x: x['level'])[-1]['tri_edge']:.3f}"
+        for n in SURFACES) for lab in ("default", "rule")}
+    wn, wt = max(((n, t) for n in SURFACES for t in results[n]["runs"]["default"]["stats"][1:]),
+                 key=lambda x: x[1]["long"] + x[1]["isolated"])
+    if tot["default"]["long"] + tot["default"]["isolated"] > 2 * (tot["rule"]["long"] + tot["rule"]["isolated"]):
+        O.append(f"- **With the default `--fidelity shape`, the coarser surface levels are clean in topology but worse "
+                 f"in geometry than with the decoder's rule alone.** Levels 1–3 of the three surfaces: "
+                 f"{tot['default']['pieces'] - tot['default']['components']} extra manifold pieces and "
+                 f"{tot['default']['nonmanifold_vertices']} non-manifold vertices with `shape`, against "
+                 f"{tot['rule']['pieces'] - tot['rule']['components']} and {tot['rule']['nonmanifold_vertices']:,} with "
+                 f"`rule`; but {tot['default']['isolated']:,} decoded points in no triangle (`rule`: "
+                 f"{tot['rule']['isolated']:,}) and {tot['default']['long']:,} long triangles (`rule`: "
+                 f"{tot['rule']['long']:,}); mean Lmin/Lmax (QT1) at level 3: {coarse_q['default']} with `shape`, "
+                 f"{coarse_q['rule']} with `rule`. Worst: {wn} level {wt['level']}, {wt['isolated']:,} of its "
+                 f"{wt['points']:,} points in no triangle and {wt['long']:,} long triangles — the fans and holes in "
+                 f"its figure. Since each level is decimated on its own reconstruction, `shape` also decimates less "
+                 f"(level 3: " + ", ".join(f"{n} {results[n]['runs']['default']['stats'][-1]['points']:,}"
+                                           for n in SURFACES)
+                 + " vertices, against " + ", ".join(f"{n} {results[n]['runs']['rule']['stats'][-1]['points']:,}"
+                                                     for n in SURFACES) + " with `rule`).")
     # Long elements.
     longs = {}
     for label, _ in SHOWN_RUNS:
@@ -962,6 +1023,34 @@ def observations(results, duplicate_keys):
     return O
 
 
+def classification_summary(results):
+    """Agreement of the two boundary classifications (§3.2 solid angles, §3.3 faces) on every volume level
+    `analyze` measured, and on every level the encoder decimated in all runs (`hmc enc --json`)."""
+    rows = [row for n in VOLUMES for row in results[n]["analyze"]["levels"]]
+    verts = sum(row["vn"] for row in rows)
+    dis = sum(row["classification"]["disagreements"] for row in rows)
+    where = [f"{n} {row['optimizer']} level {row['level']}: {row['classification']['disagreements']}"
+             for n in VOLUMES for row in results[n]["analyze"]["levels"] if row["classification"]["disagreements"]]
+    enc_levels = enc_verts = enc_dis = 0
+    for n in VOLUMES:
+        for run in results[n]["runs"].values():
+            for lev in run["enc"]["levels"]:
+                if lev["layers"]:          # decimated by the encoder
+                    enc_levels += 1
+                    enc_verts += lev["points"]
+                    enc_dis += lev["classification_disagreements"]
+    return (f"**Classification agreement.** Over the {len(rows)} volume levels below ({verts:,} vertex "
+            f"classifications) the solid-angle test and the boundary-face test disagree on {dis} vertices"
+            + (": " + "; ".join(where) if where else "")
+            + f". In every level the encoder decimated in all runs of this report ({enc_levels} levels, "
+            f"{enc_verts:,} vertices; `classification_disagreements` of `hmc enc --json`) they disagree on "
+            f"{enc_disagreements_text(enc_dis)}.")
+
+
+def enc_disagreements_text(k):
+    return "none" if k == 0 else f"{k:,} vertices"
+
+
 def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log, duplicate_keys, defaults):
     L = []
     head = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True,
@@ -980,9 +1069,7 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
                      if k in defaults)
     L.append(f"- Options: the encoder's defaults as `hmc help` states them ({dflt}) unless said otherwise. Tables "
              "4.1–4.12: `hmc analyze IN --levels 4 --json`; for volumes `analyze` encodes once per optimiser "
-             "(forward, backward, greedy) and runs with `--levels 5` so that level 3, the coarsest shown, is "
-             "decimated too and reports its layers (levels 0–3 are the same as with `--levels 4`: the encoder plans "
-             "levels finest first). Figures and topology: `hmc enc IN --levels 4` (for volumes the optimiser is then "
+             "(forward, backward, greedy). Figures and topology: `hmc enc IN --levels 4` (for volumes the optimiser is then "
              "`best`), and again with `--fidelity rule` (the decoder's alpha rule alone) for comparison. Claim (d): "
              f"extra encodes with maximal removal, `--levels {DEEP_LEVELS} --ratio 1.0` (see there).")
     L.append("- Inputs: surfaces `torus.obj`, `cat_lowres.obj`, `bimba.obj` (../shared/data/surface); volumes "
@@ -1044,11 +1131,16 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
     # 2. volumes
     L.append("## 2. Volumes: tables 4.7–4.12")
     L.append("")
-    L.append("`hmc analyze IN --levels 5 --json`, levels 0–3, one encode per optimiser. VN vertices and CN "
+    L.append("`hmc analyze IN --levels 4 --json`, one encode per optimiser. VN vertices and CN "
              "tetrahedra of the decoded level; L0 = boundary vertices, L1, L2, … = breadth-first layers inward, of "
-             "that level's mesh. QT1 radius ratio 3·r_in/R_out, QT2 2√6·r_in/L_max, QT3 12·(3V)^(2/3)/ΣL², QT4 "
+             "that level's mesh (the coarsest level too). *Boundary by faces / by solid angle*: the vertices each "
+             "classification of §3.2–3.3 calls boundary (on a face owned by one tetrahedron; solid angles summing to "
+             "less than 4π), and *disagree* the vertices they classify differently. GA = global alpha, the mean "
+             "edge length of the tetrahedra. QT1 radius ratio 3·r_in/R_out, QT2 2√6·r_in/L_max, QT3 12·(3V)^(2/3)/ΣL², QT4 "
              "normalised minimum solid angle: means over the tetrahedra, 1 for a regular tetrahedron. Level 0 is "
              "the same for all three optimisers (the thesis' *Original* row).")
+    L.append("")
+    L.append(classification_summary(results))
     L.append("")
     for n in VOLUMES:
         r = results[n]
@@ -1057,14 +1149,17 @@ def write_report(a, results, models, version, hmc_exe, root, runtime, t_hmc, log
         nl = max(len(rows[o][lvl]["layers"]) for o in OPTIMISERS for lvl in rows[o])
         L.append(f"### {n} (thesis tables {t1}, {t2})")
         L.append("")
-        L.append("| level | optimiser | VN | CN | " + " | ".join(f"L{i}" for i in range(nl)) + " |")
-        L.append("|---|---|---|---|" + "---|" * nl)
+        L.append("| level | optimiser | VN | CN | " + " | ".join(f"L{i}" for i in range(nl))
+                 + " | boundary by faces | by solid angle | disagree | GA |")
+        L.append("|---|---|---|---|" + "---|" * nl + "---|---|---|---|")
         for lvl in range(LEVELS):
             for o in (["forward"] if lvl == 0 else OPTIMISERS):
                 row = rows[o][lvl]
+                c = row["classification"]
                 lay = [f"{x:,}" for x in row["layers"]] + ["—"] * (nl - len(row["layers"]))
                 L.append(f"| {lvl} | {'(all)' if lvl == 0 else o} | {row['vn']:,} | {row['cn']:,} | "
-                         + " | ".join(lay) + " |")
+                         + " | ".join(lay) + f" | {c['boundary_by_faces']:,} | {c['boundary_by_solid_angle']:,} | "
+                         f"{c['disagreements']} | {row['ga']:.4f} |")
         L.append("")
         L.append("| level | optimiser | QT1 | QT2 | QT3 | QT4 |")
         L.append("|---|---|---|---|---|---|")
