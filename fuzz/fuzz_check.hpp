@@ -4,13 +4,16 @@
 // that takes parameters off the front of a fuzz input.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
+#include "hmc/codec.hpp"
 #include "hmc/status.hpp"
 
 #define FUZZ_CHECK(cond, ...)                                                   \
@@ -58,6 +61,21 @@ inline bool is_stream_error(hmc::Status s) {
     case hmc::Status::bad_layer:
     case hmc::Status::limit_exceeded: return true;
     default: return false;
+  }
+}
+
+/// The properties every decoded refinement layer has, whatever its coder:
+/// exactly `n` distinct points on the 2^q grid, in canonical order, none of
+/// them a point of the coarser level.
+inline void check_added_layer(const std::vector<hmc::GridPoint>& added, const std::vector<hmc::GridPoint>& coarse,
+                              std::uint64_t n, int q) {
+  const std::uint32_t mask = (std::uint32_t{1} << q) - 1;
+  FUZZ_CHECK(added.size() == n, "%zu points decoded, %llu asked for", added.size(), static_cast<unsigned long long>(n));
+  FUZZ_CHECK(std::is_sorted(added.begin(), added.end()), "added points not in canonical order");
+  FUZZ_CHECK(std::adjacent_find(added.begin(), added.end()) == added.end(), "duplicate added points");
+  for (const auto& p : added) {
+    for (auto x : p) FUZZ_CHECK(x <= mask, "coordinate %u outside the 2^%d grid", x, q);
+    FUZZ_CHECK(!std::binary_search(coarse.begin(), coarse.end(), p), "an added point repeats a coarser one");
   }
 }
 

@@ -35,13 +35,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                hmc::status_name(s), e.what());
     return 0;
   }
-  FUZZ_CHECK(added.size() == n, "%zu points decoded, %llu asked for", added.size(), static_cast<unsigned long long>(n));
-  FUZZ_CHECK(std::is_sorted(added.begin(), added.end()), "added points not in canonical order");
-  FUZZ_CHECK(std::adjacent_find(added.begin(), added.end()) == added.end(), "duplicate added points");
-  for (const auto& p : added) {
-    for (auto x : p) FUZZ_CHECK(x <= mask, "coordinate %u outside the 2^%d grid", x, q);
-    FUZZ_CHECK(!std::binary_search(coarse.begin(), coarse.end(), p), "an added point repeats a coarser one");
-  }
+  hmc_fuzz::check_added_layer(added, coarse, n, q);
   const auto again = hmc::detail::encode_refinement(coarse, added, q);
   std::vector<hmc::GridPoint> back;
   try {

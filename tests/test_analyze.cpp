@@ -21,10 +21,15 @@
 
 #include "hmc/meshio.hpp"
 #include "samples.hpp"
+#include "support/run_hmc.hpp"
 #include "support/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace hmc;
+using hmc::testgen::hmc_run;
+using hmc::testgen::q;
+using hmc::testgen::Run;
+using hmc::testgen::slurp;
 
 namespace {
 
@@ -184,32 +189,6 @@ class JsonReader {
 
 // ---- Running hmc ---------------------------------------------------------------
 
-struct Run {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-Run hmc_run(const std::string& dir, const std::string& args) {
-  const std::string o = dir + "/.stdout", e = dir + "/.stderr";
-  const std::string cmd = std::string("'") + HMC_BINARY + "' " + args + " >'" + o + "' 2>'" + e + "'";
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(o);
-  r.err = slurp(e);
-  fs::remove(o);
-  fs::remove(e);
-  return r;
-}
-
-std::string q(const std::string& s) { return "'" + s + "'"; }
 
 // Runs `hmc ARGS` (which must succeed and print JSON) and parses its output;
 // fails the test if any object repeats a key.
