@@ -15,6 +15,7 @@
 #include "quant/scalar_quantizer.hpp"
 #include "util/bytes.hpp"
 #include "util/error.hpp"
+#include "util/kdtree.hpp"
 
 namespace hmc {
 
@@ -149,31 +150,92 @@ std::vector<std::uint32_t> index_in(const std::vector<GridPoint>& points, const 
   return idx;
 }
 
-// Reconstruction side information and result for one level. `fine_index`
-// maps each finest input point to its index in the level (~0u: not in it);
-// by default, by equality of the points (levels coded exactly). Given, the
-// level is lossy: its points only approximate the input's, so, like a
-// coarser level, it keeps the rule's labels and corrects what makes the
-// surface unsound, whatever the fidelity.
+// Where the decoder puts the input of a lossy level: each finest input
+// point's index in the level (~0u: not in it) and position (grid units),
+// and the input surface carried over to those positions.
+struct LossyTarget {
+  std::vector<std::uint32_t> index;
+  std::vector<Vec3> positions;
+  std::vector<Triangle> surface;  // the input's faces (finest indices), those that do not collapse
+};
+
+// Components (faces joined by edges) and Euler characteristic of a
+// triangle list.
+std::pair<std::size_t, long> surface_topology(const std::vector<Triangle>& faces) {
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
+  std::vector<std::uint32_t> verts;
+  for (std::uint32_t i = 0; i < faces.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      const std::uint64_t x = faces[i][a], y = faces[i][(a + 1) % 3];
+      edges.push_back({(std::min(x, y) << 32) | std::max(x, y), i});
+      verts.push_back(faces[i][a]);
+    }
+  std::sort(edges.begin(), edges.end());
+  std::sort(verts.begin(), verts.end());
+  const auto nv = static_cast<long>(std::unique(verts.begin(), verts.end()) - verts.begin());
+  std::vector<std::uint32_t> parent(faces.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  long ne = 0;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    for (; j < edges.size() && edges[j].first == edges[i].first; ++j) parent[find(edges[j].second)] = find(edges[i].second);
+    ++ne;
+    i = j;
+  }
+  std::size_t comps = 0;
+  for (std::uint32_t i = 0; i < parent.size(); ++i) comps += find(i) == i;
+  return {comps, nv - ne + static_cast<long>(faces.size())};
+}
+
+// Reconstruction side information and result for one level. The target is
+// the input surface: at its own points when the level's points are input
+// points (exact layers), at the decoded points otherwise (`lossy`): the
+// encoder knows where each input point went, so it carries the input's
+// faces over to the decoded points and tunes against that surface just as
+// for an exact level. Coarser levels only approximate the input: unless the
+// fidelity is exact, they keep the rule's labels and let the decoder's
+// repair mend what makes the surface unsound.
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
-                         Fidelity fidelity, const LevelPlan* finest,
-                         const std::vector<std::uint32_t>* fine_index = nullptr) {
+                         Fidelity fidelity, const LevelPlan* finest, const LossyTarget* lossy = nullptr) {
   const bool coarser = finest != nullptr;
-  const auto idx = fine_index ? *fine_index : index_in(fine_points, plan.points);
+  const auto idx = lossy ? lossy->index : index_in(fine_points, plan.points);
+  const std::vector<Vec3>& surface_gp = lossy ? lossy->positions : fine_gp;
+  const std::vector<Triangle>& surface = lossy ? lossy->surface : fine.surface;
   std::vector<Triangle> faces;  // input faces whose vertices all survive, on this level
-  for (const auto& f : fine.surface)
-    if (idx[f[0]] != ~0u && idx[f[1]] != ~0u && idx[f[2]] != ~0u) faces.push_back({idx[f[0]], idx[f[1]], idx[f[2]]});
+  for (const auto& f : surface) {
+    const Triangle g{idx[f[0]], idx[f[1]], idx[f[2]]};
+    if (g[0] != ~0u && g[1] != ~0u && g[2] != ~0u && g[0] != g[1] && g[1] != g[2] && g[0] != g[2]) faces.push_back(g);
+  }
   TuneInput ti;
-  if (!fine.surface.empty()) ti.truth = truth_labels(plan.points, dt, fine_gp, fine.surface, faces);
-  if (kind == Kind::surface)
+  if (!surface.empty()) ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces);
+  if (kind == Kind::surface) {
+    // Level indices: ascending (RCON gap-codes the list) and distinct. A
+    // lossy level's points are not in the input's order.
     for (auto v : fine.border)
       if (idx[v] != ~0u) ti.border.push_back(idx[v]);
-  ti.surface_points = &fine_gp;
-  ti.surface = &fine.surface;
+    std::sort(ti.border.begin(), ti.border.end());
+    ti.border.erase(std::unique(ti.border.begin(), ti.border.end()), ti.border.end());
+  }
+  ti.surface_points = &surface_gp;
+  ti.surface = &surface;
   // Coarser levels only approximate the input; exact fidelity still follows it.
-  ti.approximate = fine_index != nullptr || (coarser && fidelity != Fidelity::exact);
-  (void)finest;  // topology targets are not used yet: see tune()
+  ti.approximate = coarser && fidelity != Fidelity::exact;
+  if (lossy && !ti.approximate) {
+    // The carried surface can fold where points moved: tuning mends the
+    // labels it gives and aims at the input's topology (closed inputs only:
+    // the interface of an open one is closed by the labelling's caps).
+    ti.clean_target = true;
+    if (kind == Kind::volume || fine.border.empty()) {
+      const auto [components, euler] = surface_topology(faces);
+      ti.target_components = components;
+      ti.target_euler = euler;
+    }
+  }
   TuningReport tr;
   plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
   plan.rec = reconstruct(plan.points, dt, kind, plan.params);
@@ -214,6 +276,14 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
   std::vector<GridPoint> decoded = plans.back().points;  // the base layer is exact
   for (std::size_t i = plans.size() - 1; i-- > 0;) {
     LevelPlan& plan = plans[i];
+    // `decoded` holds the coarser levels as the decoder has them: a point a
+    // coarser lossy layer placed may sit on an input point of this layer.
+    // That input point is not "already present" (the point there stands for
+    // another input point), so encode_vq_layer places it like any point
+    // whose best code is taken: at the nearest free grid point it can reach,
+    // or it is dropped. Either way the layer's points are distinct and none
+    // is a coarse point (spec 8A.2), and each input point keeps a decoded
+    // point of its own, which the reconstruction below relies on.
     VqLayer layer = encode_vq_layer(decoded, plan.added, vq, q, lo);
     std::vector<GridPoint> added;
     bool layer_exact = layer.dropped == 0;
@@ -262,20 +332,46 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
     exact = exact && layer_exact;
     if (exact || kind == Kind::points) continue;
     // Reconstruction on the decoded points: each input point of the level
-    // is where the decoder puts it.
+    // is where the decoder puts it; input points of finer levels are still
+    // where the input has them. On the finest level a dropped point is
+    // merged into the decoded point nearest to it (its faces collapse, as
+    // in an edge collapse), so the carried surface keeps no hole; on
+    // coarser levels it is simply absent, like the finer levels' points.
     const auto member = index_in(fine_points, original);
-    std::vector<std::uint32_t> idx(fine_points.size(), ~0u);
+    LossyTarget target;
+    target.index.assign(fine_points.size(), ~0u);
+    target.positions = fine_gp;
+    std::vector<KdTree<std::int64_t>::Point> level_ip;
+    KdTree<std::int64_t> level_tree;
+    if (i == 0 && !dropped.empty()) {
+      level_ip.reserve(plan.points.size());
+      for (const auto& p : plan.points) level_ip.push_back({std::int64_t{p[0]}, std::int64_t{p[1]}, std::int64_t{p[2]}});
+      level_tree = KdTree<std::int64_t>(level_ip);
+    }
     for (std::size_t f = 0; f < fine_points.size(); ++f) {
       if (member[f] == ~0u) continue;
       const std::uint64_t key = pack_point(fine_points[f]);
-      if (dropped.count(key)) continue;
-      const auto it = placed.find(key);
-      const GridPoint at = it == placed.end() ? fine_points[f] : it->second;
-      idx[f] = static_cast<std::uint32_t>(std::lower_bound(plan.points.begin(), plan.points.end(), at) - plan.points.begin());
+      std::uint32_t at_index = ~0u;
+      if (dropped.count(key)) {
+        if (i != 0) continue;
+        const auto& p = fine_points[f];
+        at_index = level_tree.nearest({std::int64_t{p[0]}, std::int64_t{p[1]}, std::int64_t{p[2]}}).index;
+      } else {
+        const auto it = placed.find(key);
+        const GridPoint at = it == placed.end() ? fine_points[f] : it->second;
+        at_index = static_cast<std::uint32_t>(std::lower_bound(plan.points.begin(), plan.points.end(), at) - plan.points.begin());
+      }
+      target.index[f] = at_index;
+      const GridPoint& g = plan.points[at_index];
+      target.positions[f] = {double(g[0]), double(g[1]), double(g[2])};
+    }
+    for (const auto& t : fine.surface) {
+      const Vec3 &a = target.positions[t[0]], &b = target.positions[t[1]], &c = target.positions[t[2]];
+      if (a != b && b != c && a != c) target.surface.push_back(t);
     }
     const Tetrahedralization dt = delaunay(plan.points);
     plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options.fidelity, i > 0 ? &plans.front() : nullptr,
-                        &idx);
+                        &target);
     lr.simplices = kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
   }
   // Every layer exact: coder 1 must also pay for the codebook.

@@ -172,11 +172,12 @@ VqLayer encode_vq_layer(const std::vector<GridPoint>& coarse_in, const std::vect
   std::unordered_set<std::uint64_t> occupied;
   occupied.reserve(2 * (coarse.size() + added_in.size()));
   for (const GridPoint& c : coarse) occupied.insert(pack(to_ipoint(c)));
-  for (const GridPoint& a : added_in) {
+  // An added point may coincide with a coarse point: when the coarser level
+  // was itself coded lossily, one of its points can land on an input point
+  // of this layer. Such a point is coded like any other; since its own
+  // position is taken, it goes to the nearest free placement (or is dropped).
+  for (const GridPoint& a : added_in)
     if ((a[0] | a[1] | a[2]) >> q) fail(Status::invalid_argument, std::string(kWhat) + ": an added point lies outside the grid");
-    if (occupied.count(pack(to_ipoint(a))) && std::binary_search(coarse.begin(), coarse.end(), a))
-      fail(Status::invalid_argument, std::string(kWhat) + ": an added point is also a coarse point");
-  }
 
   // Where (anchor, code, residual r) puts a point.
   auto place = [&](std::uint32_t anchor, std::uint32_t code, const std::array<std::int64_t, 3>& r) {

@@ -35,9 +35,13 @@ struct VqLayer {
   double sum_error2 = 0;            ///< sum of squared errors over kept points
 };
 
-/// Codes `added` (distinct grid points, none in `coarse`, any order) against
-/// `coarse` (the decoded coarser level, distinct, any order) with codebook
-/// `vq` (1 to 65536 entries). The stream depends only on the sets.
+/// Codes `added` (distinct grid points, any order) against `coarse` (the
+/// decoded coarser level, distinct, any order) with codebook `vq` (1 to
+/// 65536 entries). The stream depends only on the sets. An added point may
+/// equal a coarse point (a lossy coarser layer put one of its points there):
+/// it cannot decode to itself, so it takes the nearest free placement like
+/// any point whose best code is taken (`displaced`), or is dropped. The
+/// decoded points are always distinct and new, as the decoder requires.
 VqLayer encode_vq_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                         const VectorQuantizer& vq, int q, const VqLayerOptions& options);
 

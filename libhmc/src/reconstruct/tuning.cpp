@@ -139,6 +139,113 @@ std::vector<std::uint32_t> hole_faces(const std::vector<GridPoint>& points, cons
   return drops;
 }
 
+// Encoder-side cleanup of a target labelling (lossy levels): the input's
+// surface carried over to the decoded points can fold where points moved,
+// and its winding-number labels then leave pinch points, non-manifold
+// edges or points off the surface. A greedy local search flips tetrahedra
+// around such vertices while that strictly lowers the defects of the
+// vertices involved (defects as in spec 11.4a, here without its Euler
+// constraint: the aim is the input's topology, not the folded target's).
+// Returns the number of flips.
+class TargetCleaner {
+ public:
+  TargetCleaner(const Tetrahedralization& dt, const std::vector<std::uint8_t>& want)
+      : dt_(dt), want_(want), start_(want.size() + 1, 0), incident_(dt.tets.size() * 4) {
+    for (const auto& t : dt.tets)
+      for (auto v : t) ++start_[v + 1];
+    for (std::size_t v = 0; v < want.size(); ++v) start_[v + 1] += start_[v];
+    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+    for (std::uint32_t t = 0; t < dt.tets.size(); ++t)
+      for (auto v : dt.tets[t]) incident_[fill[v]++] = t;
+  }
+
+  std::size_t run(std::vector<std::uint8_t>& inside, int rounds) {
+    const std::size_t n = want_.size();
+    std::vector<int> cache(n, -1);
+    auto defects = [&](std::uint32_t v) {
+      if (cache[v] < 0) cache[v] = local(inside, v);
+      return cache[v];
+    };
+    auto around = [&](std::uint32_t t) {
+      int d = 0;
+      for (auto v : dt_.tets[t]) d += defects(v);
+      return d;
+    };
+    auto flip = [&](std::uint32_t t) {
+      inside[t] ^= 1;
+      for (auto v : dt_.tets[t]) cache[v] = -1;
+    };
+    std::size_t flips = 0;
+    for (int round = 0; round < rounds; ++round) {
+      bool changed = false;
+      for (std::uint32_t v = 0; v < n; ++v) {
+        if (defects(v) == 0) continue;
+        for (std::uint32_t i = start_[v]; i < start_[v + 1]; ++i) {
+          const std::uint32_t t = incident_[i];
+          const int before = around(t);
+          flip(t);
+          if (around(t) < before) {
+            changed = true;
+            ++flips;
+            if (defects(v) == 0) break;
+          } else {
+            flip(t);
+          }
+        }
+      }
+      if (!changed) break;
+    }
+    return flips;
+  }
+
+ private:
+  // Defects of v: off the interface though wanted; edges (v, w) on other
+  // than two interface faces; fans around v beyond the first.
+  int local(const std::vector<std::uint8_t>& inside, std::uint32_t v) {
+    ends_.clear();
+    for (std::uint32_t i = start_[v]; i < start_[v + 1]; ++i) {
+      const std::uint32_t t = incident_[i];
+      if (!inside[t]) continue;
+      for (int k = 0; k < 4; ++k) {
+        const std::uint32_t u = dt_.neighbors[t][k];
+        if ((u != kNoTet && inside[u]) || dt_.tets[t][k] == v) continue;
+        for (int j = 0; j < 3; ++j) {
+          const std::uint32_t w = dt_.tets[t][kFaceVertices[k][j]];
+          if (w != v) ends_.push_back(w);
+        }
+      }
+    }
+    const std::size_t faces = ends_.size() / 2;
+    if (faces == 0) return want_[v] ? 1 : 0;
+    sorted_.assign(ends_.begin(), ends_.end());
+    std::sort(sorted_.begin(), sorted_.end());
+    int d = 0;
+    for (std::size_t i = 0; i < sorted_.size();) {
+      std::size_t j = i;
+      while (j < sorted_.size() && sorted_[j] == sorted_[i]) ++j;
+      d += (j - i) != 2;
+      i = j;
+    }
+    parent_.resize(faces);
+    for (std::uint32_t f = 0; f < faces; ++f) parent_[f] = f;
+    auto find = [&](std::uint32_t x) {
+      while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+      return x;
+    };
+    for (std::uint32_t f = 0; f < faces; ++f)
+      for (std::uint32_t g = f + 1; g < faces; ++g) {
+        const std::uint32_t a = ends_[2 * f], b = ends_[2 * f + 1], c = ends_[2 * g], e = ends_[2 * g + 1];
+        if (a == c || a == e || b == c || b == e) parent_[find(f)] = find(g);
+      }
+    for (std::uint32_t f = 0; f < faces; ++f) d += find(f) == f;
+    return d - 1;
+  }
+
+  const Tetrahedralization& dt_;
+  const std::vector<std::uint8_t>& want_;
+  std::vector<std::uint32_t> start_, incident_, ends_, sorted_, parent_;
+};
+
 // What a repaired coarser level still gets wrong: unsound vertices, and a
 // topology other than the input's (weighted far above any defect).
 std::uint64_t approximation_penalty(const Tetrahedralization& dt, const std::vector<std::uint8_t>& labels,
@@ -411,6 +518,21 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     if (interface_topology(dt, labels) != interface_topology(dt, truth))
       for (std::size_t t = 0; t < nt; ++t)
         if (labels[t] != truth[t]) toggled[t] = 1, labels[t] = truth[t];
+    if (in.clean_target) {
+      // The target itself may be unsound (a lossy level's carried surface
+      // folds): mend it, and keep the result if it is sounder, counting a
+      // topology other than the input's far above any defect.
+      const std::vector<std::uint8_t> want_clean(n, kind == Kind::surface ? 1 : 0);
+      const std::uint64_t before = approximation_penalty(dt, labels, want_clean, in);
+      if (before > 0) {
+        auto cleaned = labels;
+        TargetCleaner(dt, want_clean).run(cleaned, 8);
+        repair_labels(dt, kind, cleaned);
+        if (approximation_penalty(dt, cleaned, want_clean, in) < before) labels.swap(cleaned);
+      }
+      const auto rule = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
+      for (std::size_t t = 0; t < nt; ++t) toggled[t] = labels[t] != rule[t];
+    }
     for (std::size_t t = 0; t < nt; ++t)
       if (toggled[t]) best.toggles.push_back(static_cast<std::uint32_t>(t));
   }
