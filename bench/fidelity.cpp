@@ -354,6 +354,14 @@ int main(int argc, char** argv) {
   ti.border = border;
   ti.surface_points = &gp;
   ti.surface = &surface;
+  if (fidelity == Fidelity::shape && (kind == Kind::volume || border.empty())) {  // as the encoder does
+    ti.clean_target = true;
+    {
+      const auto t = topology(in_tris);
+      ti.target_components = t.components;
+      ti.target_euler = t.euler;
+    }
+  }
   const auto params = tune(pts, dt, kind, ti, fidelity, &rep);
   const auto t3 = std::chrono::steady_clock::now();
   const auto rec = reconstruct(pts, dt, kind, params);

@@ -225,12 +225,18 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.surface = &surface;
   // Coarser levels only approximate the input; exact fidelity still follows it.
   ti.approximate = coarser && fidelity != Fidelity::exact;
-  if (lossy && !ti.approximate) {
-    // The carried surface can fold where points moved: tuning mends the
-    // labels it gives and aims at the input's topology (closed inputs only:
-    // the interface of an open one is closed by the labelling's caps).
+  const bool closed = kind == Kind::volume || fine.border.empty();
+  if (!ti.approximate && (lossy || (fidelity == Fidelity::shape && closed))) {
+    // The target can be unsound (a lossy level's carried surface folds where
+    // points moved; input triangles missing from the Delaunay leave pinches
+    // and non-manifold edges): tuning mends the labels it gives and aims at
+    // the input's topology (closed inputs only: the interface of an open one
+    // is closed by the labelling's caps). Exact fidelity on exact levels
+    // keeps the input's labels as they are; so does an open input surface on
+    // an exact level, where mending without a topology to aim at opens more
+    // holes than it closes (the bunny: 41 more border edges).
     ti.clean_target = true;
-    if (kind == Kind::volume || fine.border.empty()) {
+    if (closed) {
       const auto [components, euler] = surface_topology(faces);
       ti.target_components = components;
       ti.target_euler = euler;

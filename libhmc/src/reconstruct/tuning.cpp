@@ -149,8 +149,10 @@ std::vector<std::uint32_t> hole_faces(const std::vector<GridPoint>& points, cons
 // Returns the number of flips.
 class TargetCleaner {
  public:
-  TargetCleaner(const Tetrahedralization& dt, const std::vector<std::uint8_t>& want)
-      : dt_(dt), want_(want), start_(want.size() + 1, 0), incident_(dt.tets.size() * 4) {
+  // `flippable`: the tetrahedra the search may flip (empty: all).
+  TargetCleaner(const Tetrahedralization& dt, const std::vector<std::uint8_t>& want,
+                const std::vector<std::uint8_t>& flippable = {})
+      : dt_(dt), want_(want), flippable_(flippable), start_(want.size() + 1, 0), incident_(dt.tets.size() * 4) {
     for (const auto& t : dt.tets)
       for (auto v : t) ++start_[v + 1];
     for (std::size_t v = 0; v < want.size(); ++v) start_[v + 1] += start_[v];
@@ -182,6 +184,7 @@ class TargetCleaner {
         if (defects(v) == 0) continue;
         for (std::uint32_t i = start_[v]; i < start_[v + 1]; ++i) {
           const std::uint32_t t = incident_[i];
+          if (!flippable_.empty() && !flippable_[t]) continue;
           const int before = around(t);
           flip(t);
           if (around(t) < before) {
@@ -243,6 +246,7 @@ class TargetCleaner {
 
   const Tetrahedralization& dt_;
   const std::vector<std::uint8_t>& want_;
+  const std::vector<std::uint8_t>& flippable_;
   std::vector<std::uint32_t> start_, incident_, ends_, sorted_, parent_;
 };
 
@@ -519,14 +523,30 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       for (std::size_t t = 0; t < nt; ++t)
         if (labels[t] != truth[t]) toggled[t] = 1, labels[t] = truth[t];
     if (in.clean_target) {
-      // The target itself may be unsound (a lossy level's carried surface
-      // folds): mend it, and keep the result if it is sounder, counting a
-      // topology other than the input's far above any defect.
+      // The target itself may be unsound: a lossy level's carried surface
+      // folds, and where input triangles are not Delaunay the winding-number
+      // labels can pinch or leave non-manifold edges. Mend it, and keep the
+      // result if it is sounder, counting a topology other than the input's
+      // far above any defect.
       const std::vector<std::uint8_t> want_clean(n, kind == Kind::surface ? 1 : 0);
       const std::uint64_t before = approximation_penalty(dt, labels, want_clean, in);
       if (before > 0) {
+        // Only tetrahedra whose edges are at most about 1.4 times the longest
+        // target edge at their vertices: mending a fold or a pinch must not
+        // grow a bump (on the horse, allowing twice that length moves the
+        // surface by 0.6% of the diagonal instead of 0.25%).
+        std::vector<std::uint8_t> small(nt, 0);
+        for (std::size_t t = 0; t < nt; ++t) {
+          const auto& T = dt.tets[t];
+          std::uint64_t longest = 0, reach = 0;
+          for (int i = 0; i < 4; ++i) {
+            reach = std::max(reach, need[T[i]]);
+            for (int j = i + 1; j < 4; ++j) longest = std::max(longest, dist2(points[T[i]], points[T[j]]));
+          }
+          small[t] = longest <= 2 * reach;
+        }
         auto cleaned = labels;
-        TargetCleaner(dt, want_clean).run(cleaned, 8);
+        TargetCleaner(dt, want_clean, small).run(cleaned, 8);
         repair_labels(dt, kind, cleaned);
         if (approximation_penalty(dt, cleaned, want_clean, in) < before) labels.swap(cleaned);
       }
