@@ -159,38 +159,6 @@ struct LossyTarget {
   std::vector<Triangle> surface;  // the input's faces (finest indices), those that do not collapse
 };
 
-// Components (faces joined by edges) and Euler characteristic of a
-// triangle list.
-std::pair<std::size_t, long> surface_topology(const std::vector<Triangle>& faces) {
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
-  std::vector<std::uint32_t> verts;
-  for (std::uint32_t i = 0; i < faces.size(); ++i)
-    for (int a = 0; a < 3; ++a) {
-      const std::uint64_t x = faces[i][a], y = faces[i][(a + 1) % 3];
-      edges.push_back({(std::min(x, y) << 32) | std::max(x, y), i});
-      verts.push_back(faces[i][a]);
-    }
-  std::sort(edges.begin(), edges.end());
-  std::sort(verts.begin(), verts.end());
-  const auto nv = static_cast<long>(std::unique(verts.begin(), verts.end()) - verts.begin());
-  std::vector<std::uint32_t> parent(faces.size());
-  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-  auto find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  long ne = 0;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    for (; j < edges.size() && edges[j].first == edges[i].first; ++j) parent[find(edges[j].second)] = find(edges[i].second);
-    ++ne;
-    i = j;
-  }
-  std::size_t comps = 0;
-  for (std::uint32_t i = 0; i < parent.size(); ++i) comps += find(i) == i;
-  return {comps, nv - ne + static_cast<long>(faces.size())};
-}
-
 // Reconstruction side information and result for one level. The target is
 // the input surface: at its own points when the level's points are input
 // points (exact layers), at the decoded points otherwise (`lossy`): the

@@ -267,18 +267,9 @@ std::uint64_t approximation_penalty(const Tetrahedralization& dt, const std::vec
 
 }  // namespace
 
-// Components (of faces joined by edges) and Euler characteristic of the
-// interface between inside and outside tetrahedra.
-std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside) {
-  std::vector<std::array<std::uint32_t, 3>> faces;
-  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
-    if (!inside[t]) continue;
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      if (u != kNoTet && inside[u]) continue;
-      faces.push_back({dt.tets[t][kFaceVertices[k][0]], dt.tets[t][kFaceVertices[k][1]], dt.tets[t][kFaceVertices[k][2]]});
-    }
-  }
+// Components (of faces joined by edges) and Euler characteristic of a
+// triangle list.
+std::pair<std::size_t, long> surface_topology(const std::vector<Triangle>& faces) {
   std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
   std::vector<std::uint32_t> verts;
   for (std::uint32_t i = 0; i < faces.size(); ++i)
@@ -309,6 +300,21 @@ std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, co
   std::size_t comps = 0;
   for (std::uint32_t i = 0; i < parent.size(); ++i) comps += find(i) == i;
   return {comps, nv - ne + static_cast<long>(faces.size())};
+}
+
+// Components (of faces joined by edges) and Euler characteristic of the
+// interface between inside and outside tetrahedra.
+std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside) {
+  std::vector<Triangle> faces;
+  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+    if (!inside[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && inside[u]) continue;
+      faces.push_back({dt.tets[t][kFaceVertices[k][0]], dt.tets[t][kFaceVertices[k][1]], dt.tets[t][kFaceVertices[k][2]]});
+    }
+  }
+  return surface_topology(faces);
 }
 
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,

@@ -30,6 +30,10 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
                                        const std::vector<Triangle>& input_faces_on_points);
 
+/// Components (of faces joined by edges) and Euler characteristic of a
+/// triangle list.
+std::pair<std::size_t, long> surface_topology(const std::vector<Triangle>& faces);
+
 /// Components (of faces joined by edges) and Euler characteristic of the
 /// surface between inside and outside tetrahedra.
 std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside);
