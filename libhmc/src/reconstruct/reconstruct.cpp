@@ -200,9 +200,16 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
 
 // Local soundness of the interface around vertex v: 1 if v should be on it
 // and is not, plus 1 per incident edge used by other than 0 or 2 faces.
+// Work buffers of local_defects(), reused from call to call.
+struct DefectScratch {
+  std::vector<std::uint32_t> ends, parent;
+  std::vector<std::uint64_t> sorted;
+};
+
 int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
-                  const std::vector<std::uint8_t>& want, std::uint32_t v, std::vector<std::uint32_t>& scratch) {
+                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work) {
+  std::vector<std::uint32_t>& scratch = work.ends;
   // scratch holds, for each interface face around v, its other two
   // vertices (a, b) as consecutive entries.
   scratch.clear();
@@ -222,29 +229,28 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
   }
   const std::size_t faces = scratch.size() / 2;
   if (faces == 0) return want[v] ? 1 : 0;
-  // Edges (v, w) used by other than two faces.
-  std::vector<std::uint32_t> ends(scratch);
+  // (w, face) for both ends w of every face's edges (v, w), sorted by w.
+  std::vector<std::uint64_t>& ends = work.sorted;
+  ends.resize(scratch.size());
+  for (std::size_t i = 0; i < scratch.size(); ++i) ends[i] = (std::uint64_t{scratch[i]} << 32) | (i / 2);
   std::sort(ends.begin(), ends.end());
-  int d = 0;
-  for (std::size_t i = 0; i < ends.size();) {
-    std::size_t j = i;
-    while (j < ends.size() && ends[j] == ends[i]) ++j;
-    d += (j - i) != 2;
-    i = j;
-  }
-  // Fans: faces around v joined through shared edges (v, w); more than one
-  // fan makes v a pinch point.
-  std::vector<std::uint32_t> parent(faces);
+  // Edges (v, w) used by other than two faces; fans: faces around v joined
+  // through shared edges (v, w); more than one fan makes v a pinch point.
+  std::vector<std::uint32_t>& parent = work.parent;
+  parent.resize(faces);
   for (std::uint32_t f = 0; f < faces; ++f) parent[f] = f;
   auto find = [&](std::uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  for (std::uint32_t f = 0; f < faces; ++f)
-    for (std::uint32_t g = f + 1; g < faces; ++g) {
-      const std::uint32_t a = scratch[2 * f], b = scratch[2 * f + 1], c = scratch[2 * g], e = scratch[2 * g + 1];
-      if (a == c || a == e || b == c || b == e) parent[find(f)] = find(g);
-    }
+  int d = 0;
+  for (std::size_t i = 0; i < ends.size();) {
+    std::size_t j = i + 1;
+    for (; j < ends.size() && (ends[j] >> 32) == (ends[i] >> 32); ++j)
+      parent[find(static_cast<std::uint32_t>(ends[j]))] = find(static_cast<std::uint32_t>(ends[i]));
+    d += (j - i) != 2;
+    i = j;
+  }
   for (std::uint32_t f = 0; f < faces; ++f) d += find(f) == f;
   return d - 1;  // one fan is sound
 }
@@ -261,7 +267,7 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
   for (std::uint32_t t = 0; t < nt; ++t)
     for (auto v : dt.tets[t]) incident[fill[v]++] = t;
-  std::vector<std::uint32_t> scratch;
+  DefectScratch scratch;
   auto exposed = [&](std::uint32_t t, int k) {
     if (!inside[t]) return false;
     const std::uint32_t u = dt.neighbors[t][k];
@@ -317,21 +323,60 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
     for (auto v : dt.tets[t]) d += defects(v);
     return d;
   };
+  // A try at t reads only the labels of tetrahedra incident to t's
+  // vertices, all of them neighbours of v. So a vertex whose last visit
+  // kept no flip fails again, try for try, unless a flip kept since then
+  // touched one of its neighbours: such visits are skipped (same result,
+  // far less work; most unsound vertices cannot be mended).
+  std::uint64_t clock = 1;
+  constexpr std::uint64_t kNever = ~std::uint64_t{0};
+  std::vector<std::uint64_t> touched(n, 0), failed_at(n, kNever);
+  auto unchanged_since = [&](std::uint32_t v, std::uint64_t when) {
+    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
+      for (auto w : dt.tets[incident[i]])
+        if (touched[w] > when) return false;
+    return true;
+  };
   for (int round = 0; round < 6; ++round) {
     bool changed = false;
     for (std::uint32_t v = 0; v < n; ++v) {
       if (defects(v) == 0) continue;
+      if (failed_at[v] != kNever && unchanged_since(v, failed_at[v])) continue;
+      bool kept = false;
       for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
         const std::uint32_t t = incident[i];
-        const int before = around(t), chi = local_euler(t);
+        const auto& tv = dt.tets[t];
+        const int before = around(t);
+        // Flipping t back restores the labels, so also the cached defects
+        // of its vertices (the only ones a flip of t changes).
+        const int was[4] = {cache[tv[0]], cache[tv[1]], cache[tv[2]], cache[tv[3]]};
+        auto restore = [&](const int (&c)[4]) {
+          for (int k = 0; k < 4; ++k) cache[tv[k]] = c[k];
+        };
         flip(t);
-        if (around(t) < before && local_euler(t) == chi) {
-          changed = true;
+        if (around(t) >= before) {  // most tries end here: no Euler check needed
+          flip(t);
+          restore(was);
+          continue;
+        }
+        const int now[4] = {cache[tv[0]], cache[tv[1]], cache[tv[2]], cache[tv[3]]};
+        const int chi_after = local_euler(t);
+        flip(t);
+        restore(was);
+        const int chi_before = local_euler(t);
+        flip(t);
+        restore(now);
+        if (chi_after == chi_before) {
+          changed = kept = true;
+          ++clock;
+          for (auto w : dt.tets[t]) touched[w] = clock;
           if (defects(v) == 0) break;
         } else {
           flip(t);
+          restore(was);
         }
       }
+      failed_at[v] = kept ? kNever : clock;
     }
     if (!changed) break;
   }
