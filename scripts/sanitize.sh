@@ -23,7 +23,9 @@ hmc_install_missing clang libclang-rt-14-dev || echo "sanitize: cannot install c
 ASAN_BUILD=${HMC_ASAN_BUILD:-$HMC_ROOT/build-asan}
 FUZZ_BUILD=${HMC_FUZZ_BUILD:-$HMC_ROOT/build-fuzz}
 FUZZ_SECONDS=${HMC_FUZZ_SECONDS:-20}
-TARGETS="container huffman base_layer decode roundtrip"
+# Every fuzz target, as fuzz/CMakeLists.txt lists them.
+TARGETS=$(sed -n 's/^set(HMC_FUZZ_TARGETS \(.*\))$/\1/p' "$HMC_ROOT/fuzz/CMakeLists.txt")
+[ -n "$TARGETS" ] || { echo "sanitize: no fuzz targets found in fuzz/CMakeLists.txt" >&2; exit 1; }
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
