@@ -64,6 +64,20 @@ inline bool is_stream_error(hmc::Status s) {
   }
 }
 
+/// A coarser level from the input, as the layer targets read it: u8 q
+/// (mapped to 1..21), u8 count c (1..64), then c points of 3 x u24 masked to
+/// the 2^q grid; returned distinct and in canonical order, with q.
+inline std::vector<hmc::GridPoint> read_coarse_level(Params& params, int& q) {
+  q = 1 + params.u8() % 21;
+  const std::uint32_t mask = (std::uint32_t{1} << q) - 1;
+  const int c = 1 + params.u8() % 64;
+  std::vector<hmc::GridPoint> coarse;
+  for (int i = 0; i < c; ++i) coarse.push_back({params.u24() & mask, params.u24() & mask, params.u24() & mask});
+  std::sort(coarse.begin(), coarse.end());
+  coarse.erase(std::unique(coarse.begin(), coarse.end()), coarse.end());
+  return coarse;
+}
+
 /// The properties every decoded refinement layer has, whatever its coder:
 /// exactly `n` distinct points on the 2^q grid, in canonical order, none of
 /// them a point of the coarser level.

@@ -29,13 +29,8 @@ std::int32_t signed24(std::uint32_t v) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   hmc_fuzz::Params params(data, size);
-  const int q = 1 + params.u8() % 21;
-  const std::uint32_t mask = (std::uint32_t{1} << q) - 1;
-  const int c = 1 + params.u8() % 64;
-  std::vector<hmc::GridPoint> coarse;
-  for (int i = 0; i < c; ++i) coarse.push_back({params.u24() & mask, params.u24() & mask, params.u24() & mask});
-  std::sort(coarse.begin(), coarse.end());
-  coarse.erase(std::unique(coarse.begin(), coarse.end()), coarse.end());
+  int q = 0;
+  const std::vector<hmc::GridPoint> coarse = hmc_fuzz::read_coarse_level(params, q);
   hmc::VectorQuantizer vq;
   const int k = 1 + params.u8() % 32;
   for (int i = 0; i < k; ++i) vq.codebook.push_back({signed24(params.u24()), signed24(params.u24()), signed24(params.u24())});
