@@ -200,61 +200,6 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
 
 // Local soundness of the interface around vertex v: 1 if v should be on it
 // and is not, plus 1 per incident edge used by other than 0 or 2 faces.
-// Work buffers of local_defects(), reused from call to call.
-struct DefectScratch {
-  std::vector<std::uint32_t> ends, parent;
-  std::vector<std::uint64_t> sorted;
-};
-
-int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
-                  const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
-                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work) {
-  std::vector<std::uint32_t>& scratch = work.ends;
-  // scratch holds, for each interface face around v, its other two
-  // vertices (a, b) as consecutive entries.
-  scratch.clear();
-  for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
-    const std::uint32_t t = incident[i];
-    if (!inside[t]) continue;
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      if (u != kNoTet && inside[u]) continue;
-      const auto& tet = dt.tets[t];
-      if (tet[k] == v) continue;  // the face opposite v does not contain it
-      for (int j = 0; j < 3; ++j) {
-        const std::uint32_t w = tet[kFaceVertices[k][j]];
-        if (w != v) scratch.push_back(w);
-      }
-    }
-  }
-  const std::size_t faces = scratch.size() / 2;
-  if (faces == 0) return want[v] ? 1 : 0;
-  // (w, face) for both ends w of every face's edges (v, w), sorted by w.
-  std::vector<std::uint64_t>& ends = work.sorted;
-  ends.resize(scratch.size());
-  for (std::size_t i = 0; i < scratch.size(); ++i) ends[i] = (std::uint64_t{scratch[i]} << 32) | (i / 2);
-  std::sort(ends.begin(), ends.end());
-  // Edges (v, w) used by other than two faces; fans: faces around v joined
-  // through shared edges (v, w); more than one fan makes v a pinch point.
-  std::vector<std::uint32_t>& parent = work.parent;
-  parent.resize(faces);
-  for (std::uint32_t f = 0; f < faces; ++f) parent[f] = f;
-  auto find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  int d = 0;
-  for (std::size_t i = 0; i < ends.size();) {
-    std::size_t j = i + 1;
-    for (; j < ends.size() && (ends[j] >> 32) == (ends[i] >> 32); ++j)
-      parent[find(static_cast<std::uint32_t>(ends[j]))] = find(static_cast<std::uint32_t>(ends[i]));
-    d += (j - i) != 2;
-    i = j;
-  }
-  for (std::uint32_t f = 0; f < faces; ++f) d += find(f) == f;
-  return d - 1;  // one fan is sound
-}
-
 // Greedy local search: flip tetrahedra around unsound vertices while that
 // strictly reduces the defects of the vertices involved and keeps the
 // interface's Euler characteristic (no handles or components appear).
@@ -383,6 +328,56 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
 }
 
 }  // namespace
+
+int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                  const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
+                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work) {
+  std::vector<std::uint32_t>& scratch = work.ends;
+  // scratch holds, for each interface face around v, its other two
+  // vertices (a, b) as consecutive entries.
+  scratch.clear();
+  for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+    const std::uint32_t t = incident[i];
+    if (!inside[t]) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && inside[u]) continue;
+      const auto& tet = dt.tets[t];
+      if (tet[k] == v) continue;  // the face opposite v does not contain it
+      for (int j = 0; j < 3; ++j) {
+        const std::uint32_t w = tet[kFaceVertices[k][j]];
+        if (w != v) scratch.push_back(w);
+      }
+    }
+  }
+  const std::size_t faces = scratch.size() / 2;
+  if (faces == 0) return want[v] ? 1 : 0;
+  // (w, face) for both ends w of every face's edges (v, w), sorted by w.
+  std::vector<std::uint64_t>& ends = work.sorted;
+  ends.resize(scratch.size());
+  for (std::size_t i = 0; i < scratch.size(); ++i) ends[i] = (std::uint64_t{scratch[i]} << 32) | (i / 2);
+  std::sort(ends.begin(), ends.end());
+  // Edges (v, w) used by other than two faces; fans: faces around v joined
+  // through shared edges (v, w); more than one fan makes v a pinch point.
+  std::vector<std::uint32_t>& parent = work.parent;
+  parent.resize(faces);
+  for (std::uint32_t f = 0; f < faces; ++f) parent[f] = f;
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  int d = 0;
+  for (std::size_t i = 0; i < ends.size();) {
+    std::size_t j = i + 1;
+    for (; j < ends.size() && (ends[j] >> 32) == (ends[i] >> 32); ++j)
+      parent[find(static_cast<std::uint32_t>(ends[j]))] = find(static_cast<std::uint32_t>(ends[i]));
+    d += (j - i) != 2;
+    i = j;
+  }
+  for (std::uint32_t f = 0; f < faces; ++f) d += find(f) == f;
+  return d - 1;  // one fan is sound
+}
+
 
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        std::uint32_t rank) {

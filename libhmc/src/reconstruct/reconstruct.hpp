@@ -67,6 +67,22 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
 /// surface's local Euler characteristic.
 void repair_labels(const Tetrahedralization& dt, Kind kind, std::vector<std::uint8_t>& inside);
 
+/// Work buffers of local_defects(), reused from call to call.
+struct DefectScratch {
+  std::vector<std::uint32_t> ends, parent;
+  std::vector<std::uint64_t> sorted;
+};
+
+/// Defects of vertex v under the labels `inside` (spec 11.4a): 1 if it is
+/// off the interface though `want[v]`; else the edges (v, w) on other than
+/// two interface faces plus the fans of interface faces around v beyond the
+/// first. `start`/`incident`: the tetrahedra incident to each vertex
+/// (incident[start[v] .. start[v + 1])). Reads only the labels of the
+/// tetrahedra incident to v.
+int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                  const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
+                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work);
+
 /// Surface or volume from final labels (toggles applied by the caller);
 /// of `p` only the border and drop lists are used.
 Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vector<std::uint8_t>& inside,

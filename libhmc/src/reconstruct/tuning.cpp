@@ -202,52 +202,15 @@ class TargetCleaner {
   }
 
  private:
-  // Defects of v: off the interface though wanted; edges (v, w) on other
-  // than two interface faces; fans around v beyond the first.
   int local(const std::vector<std::uint8_t>& inside, std::uint32_t v) {
-    ends_.clear();
-    for (std::uint32_t i = start_[v]; i < start_[v + 1]; ++i) {
-      const std::uint32_t t = incident_[i];
-      if (!inside[t]) continue;
-      for (int k = 0; k < 4; ++k) {
-        const std::uint32_t u = dt_.neighbors[t][k];
-        if ((u != kNoTet && inside[u]) || dt_.tets[t][k] == v) continue;
-        for (int j = 0; j < 3; ++j) {
-          const std::uint32_t w = dt_.tets[t][kFaceVertices[k][j]];
-          if (w != v) ends_.push_back(w);
-        }
-      }
-    }
-    const std::size_t faces = ends_.size() / 2;
-    if (faces == 0) return want_[v] ? 1 : 0;
-    sorted_.assign(ends_.begin(), ends_.end());
-    std::sort(sorted_.begin(), sorted_.end());
-    int d = 0;
-    for (std::size_t i = 0; i < sorted_.size();) {
-      std::size_t j = i;
-      while (j < sorted_.size() && sorted_[j] == sorted_[i]) ++j;
-      d += (j - i) != 2;
-      i = j;
-    }
-    parent_.resize(faces);
-    for (std::uint32_t f = 0; f < faces; ++f) parent_[f] = f;
-    auto find = [&](std::uint32_t x) {
-      while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
-      return x;
-    };
-    for (std::uint32_t f = 0; f < faces; ++f)
-      for (std::uint32_t g = f + 1; g < faces; ++g) {
-        const std::uint32_t a = ends_[2 * f], b = ends_[2 * f + 1], c = ends_[2 * g], e = ends_[2 * g + 1];
-        if (a == c || a == e || b == c || b == e) parent_[find(f)] = find(g);
-      }
-    for (std::uint32_t f = 0; f < faces; ++f) d += find(f) == f;
-    return d - 1;
+    return local_defects(dt_, inside, start_, incident_, want_, v, work_);
   }
 
   const Tetrahedralization& dt_;
   const std::vector<std::uint8_t>& want_;
   const std::vector<std::uint8_t>& flippable_;
-  std::vector<std::uint32_t> start_, incident_, ends_, sorted_, parent_;
+  std::vector<std::uint32_t> start_, incident_;
+  DefectScratch work_;
 };
 
 // What a repaired coarser level still gets wrong: unsound vertices, and a
