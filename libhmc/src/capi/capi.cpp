@@ -479,34 +479,36 @@ hmc_status hmc_decoder_level_positions(const hmc_decoder* decoder, size_t index,
   });
 }
 
-hmc_status hmc_decoder_level_triangles(const hmc_decoder* decoder, size_t index, uint32_t** out_indices,
-                                       size_t* out_count) {
+extern "C++" {
+namespace {
+// A copy of one level's triangles or tetrahedra (E: 3 or 4 indices each).
+template <class E>
+hmc_status level_elements(const hmc_decoder* decoder, size_t index, uint32_t** out_indices, size_t* out_count,
+                          const std::vector<E> hmc::DecodedLevel::*elements) {
   if (out_indices) *out_indices = nullptr;
   if (out_count) *out_count = 0;
   if (!decoder || !out_indices || !out_count) return HMC_INVALID_ARGUMENT;
   return guard(decoder->message, [&]() -> hmc_status {
     const hmc::DecodedLevel* l = decoder->level(index);
     if (!l) return HMC_INVALID_ARGUMENT;
-    const hmc_status s =
-        hand_out(decoder->alloc, l->triangles.data(), 3 * l->triangles.size(), out_indices, decoder->message);
-    if (s == HMC_OK) *out_count = l->triangles.size();
+    const std::vector<E>& e = l->*elements;
+    const hmc_status s = hand_out(decoder->alloc, e.empty() ? nullptr : e.front().data(),
+                                  std::tuple_size<E>::value * e.size(), out_indices, decoder->message);
+    if (s == HMC_OK) *out_count = e.size();
     return s;
   });
+}
+}  // namespace
+}  // extern "C++"
+
+hmc_status hmc_decoder_level_triangles(const hmc_decoder* decoder, size_t index, uint32_t** out_indices,
+                                       size_t* out_count) {
+  return level_elements(decoder, index, out_indices, out_count, &hmc::DecodedLevel::triangles);
 }
 
 hmc_status hmc_decoder_level_tetrahedra(const hmc_decoder* decoder, size_t index, uint32_t** out_indices,
                                         size_t* out_count) {
-  if (out_indices) *out_indices = nullptr;
-  if (out_count) *out_count = 0;
-  if (!decoder || !out_indices || !out_count) return HMC_INVALID_ARGUMENT;
-  return guard(decoder->message, [&]() -> hmc_status {
-    const hmc::DecodedLevel* l = decoder->level(index);
-    if (!l) return HMC_INVALID_ARGUMENT;
-    const hmc_status s =
-        hand_out(decoder->alloc, l->tetrahedra.data(), 4 * l->tetrahedra.size(), out_indices, decoder->message);
-    if (s == HMC_OK) *out_count = l->tetrahedra.size();
-    return s;
-  });
+  return level_elements(decoder, index, out_indices, out_count, &hmc::DecodedLevel::tetrahedra);
 }
 
 }  // extern "C"
