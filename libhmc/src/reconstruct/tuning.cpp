@@ -360,6 +360,20 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   }
 
   const std::vector<std::uint8_t> want_all(n, kind == Kind::surface ? 1 : 0);
+  // What parameters p leave to correct: the rule's labels that differ from
+  // the truth or, on a coarser level that relies on the decoder's repair,
+  // what the repair cannot mend.
+  auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale) {
+    auto labels = rule_labels(points, dt, scale, p);
+    std::uint64_t m = 0;
+    if (p.repair) {
+      repair_labels(dt, kind, labels);
+      m += approximation_penalty(dt, labels, want_all, in);
+    } else {
+      for (std::size_t t = 0; t < nt; ++t) m += labels[t] != truth[t];
+    }
+    return m;
+  };
   std::uint64_t best_bits = ~std::uint64_t{0};
   std::uint64_t best_mismatch = 0;
   // A surface vertex has about six surface neighbours; a volume's boundary
@@ -406,16 +420,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       for (bool peel : {false, true}) {
         p.peel = peel;
         p.repair = in.approximate && fidelity != Fidelity::rule;
-        auto labels = rule_labels(points, dt, scale, p);
-        std::uint64_t mism = 0;
-        if (p.repair) {
-          // A coarser level relies on the decoder's repair; what it cannot
-          // mend would need corrections.
-          repair_labels(dt, kind, labels);
-          mism += approximation_penalty(dt, labels, want_all, in);
-        } else {
-          for (std::size_t t = 0; t < nt; ++t) mism += labels[t] != truth[t];
-        }
+        const std::uint64_t mism = cost(p, scale);
         const std::uint64_t bits = class_bits + list_bits(mism, nt);
         if (bits < best_bits) {
           best_bits = bits;
@@ -429,25 +434,14 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // rule gets wrong (or, on coarser levels, the repairs it needs).
   {
     const auto scale = local_scale(points, dt, best.scale_rank);
-    auto cost = [&](const ReconParams& p) {
-      auto labels = rule_labels(points, dt, scale, p);
-      std::uint64_t m = 0;
-      if (p.repair) {
-        repair_labels(dt, kind, labels);
-        m += approximation_penalty(dt, labels, want_all, in);
-      } else {
-        for (std::size_t t = 0; t < nt; ++t) m += labels[t] != truth[t];
-      }
-      return m;
-    };
-    std::uint64_t current = cost(best);
+    std::uint64_t current = best_mismatch;  // cost(best, scale), known from the search
     const std::pair<int, std::uint32_t> tries[] = {{kCircleRadius, 512}, {kEdgeRatio, 16},       {kDensity, 1024},
                                                    {kLone, 1},           {kNeighbourRadius, 4096}, {kNeighbourRatio, 32}};
     for (const auto& [id, threshold] : tries) {
       if (in.approximate) break;  // coarser levels: the repair does better, at no cost
       ReconParams p = best;
       p.filters[static_cast<std::size_t>(id)] = threshold;
-      const std::uint64_t c = cost(p);
+      const std::uint64_t c = cost(p, scale);
       if (c < current) {
         current = c;
         best = p;
