@@ -391,42 +391,84 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     }
     std::vector<std::uint32_t> sorted_ratio(ratio);
     std::sort(sorted_ratio.begin(), sorted_ratio.end());
-    for (int classes : {1, 2, 4, 8, 16}) {
-      // Each trial on a coarser level runs the repair: try fewer there.
-      if (in.approximate && classes > 4) break;
-      ReconParams p;
+    // Class limits at the needed ratios of the vertices at the given ranks
+    // (ascending; the last class covers every vertex), each vertex in the
+    // smallest class that admits its edges.
+    auto with_classes = [&](const std::vector<std::size_t>& splits, ReconParams& p) {
       p.scale_rank = rank;
       p.border = border;
       p.multipliers.clear();
-      // Class limits at quantiles of the needed ratios (the last one covers
-      // every vertex), so each class holds a similar share of vertices.
-      for (int c = 1; c <= classes; ++c) {
-        const std::size_t q = std::min(n - 1, (n * static_cast<std::size_t>(c)) / static_cast<std::size_t>(classes));
-        const std::uint32_t m = c == classes ? sorted_ratio.back() : sorted_ratio[q];
-        if (p.multipliers.empty() || m > p.multipliers.back()) p.multipliers.push_back(m);
-      }
+      p.vertex_class.clear();
+      for (std::size_t q : splits)
+        if (p.multipliers.empty() || sorted_ratio[q] > p.multipliers.back()) p.multipliers.push_back(sorted_ratio[q]);
+      if (p.multipliers.empty() || sorted_ratio.back() > p.multipliers.back()) p.multipliers.push_back(sorted_ratio.back());
       p.multipliers.front() = std::max<std::uint32_t>(p.multipliers.front(), 1);
-      std::uint64_t class_bits = 0;
-      if (p.multipliers.size() > 1) {
-        p.vertex_class.resize(n);
-        std::vector<std::uint64_t> freq(p.multipliers.size(), 0);
-        for (std::size_t v = 0; v < n; ++v) {
-          const auto it = std::lower_bound(p.multipliers.begin(), p.multipliers.end(), ratio[v]);
-          p.vertex_class[v] = static_cast<std::uint8_t>(it - p.multipliers.begin());
-          ++freq[p.vertex_class[v]];
-        }
-        class_bits = HuffmanCode::from_frequencies(freq).cost(freq) + 8 * p.multipliers.size();
+      if (p.multipliers.size() == 1) return std::uint64_t{0};
+      p.vertex_class.resize(n);
+      std::vector<std::uint64_t> freq(p.multipliers.size(), 0);
+      for (std::size_t v = 0; v < n; ++v) {
+        const auto it = std::lower_bound(p.multipliers.begin(), p.multipliers.end(), ratio[v]);
+        p.vertex_class[v] = static_cast<std::uint8_t>(it - p.multipliers.begin());
+        ++freq[p.vertex_class[v]];
       }
+      return HuffmanCode::from_frequencies(freq).cost(freq) + 8 * p.multipliers.size();
+    };
+    auto consider = [&](const ReconParams& p, std::uint64_t class_bits) {
+      const std::uint64_t mism = cost(p, scale);
+      const std::uint64_t bits = class_bits + list_bits(mism, nt);
+      if (bits >= best_bits) return false;
+      best_bits = bits;
+      best_mismatch = mism;
+      best = p;
+      return true;
+    };
+    // Equal shares first: 1, 2, 4, 8 or 16 classes.
+    std::vector<std::size_t> best_splits;
+    for (int classes : {1, 2, 4, 8, 16}) {
+      // Each trial on a coarser level runs the repair: try fewer there.
+      if (in.approximate && classes > 4) break;
+      std::vector<std::size_t> splits;
+      for (int c = 1; c < classes; ++c) splits.push_back(std::min(n - 1, (n * static_cast<std::size_t>(c)) / static_cast<std::size_t>(classes)));
+      ReconParams p;
+      const std::uint64_t class_bits = with_classes(splits, p);
       for (bool peel : {false, true}) {
         p.peel = peel;
         p.repair = in.approximate && fidelity != Fidelity::rule;
-        const std::uint64_t mism = cost(p, scale);
-        const std::uint64_t bits = class_bits + list_bits(mism, nt);
-        if (bits < best_bits) {
-          best_bits = bits;
-          best_mismatch = mism;
-          best = p;
+        if (consider(p, class_bits)) best_splits = splits;
+      }
+    }
+    // Then unequal shares: classes cost n·H(shares) bits, so a large class of
+    // small limits and a few small classes of large ones is often cheaper at
+    // about the same mismatches. Greedily add, drop or move one limit among
+    // fixed quantiles while the estimate falls.
+    if (!in.approximate && n >= 64 && best.scale_rank == rank) {
+      static constexpr int kPermille[] = {300, 500, 650, 750, 850, 900, 950, 980, 995};
+      std::vector<std::size_t> grid;
+      for (int pm : kPermille) grid.push_back(std::min(n - 1, n * static_cast<std::size_t>(pm) / 1000));
+      const bool peel = best.peel;
+      for (int step = 0; step < 6; ++step) {
+        std::vector<std::vector<std::size_t>> moves;
+        for (std::size_t g : grid)
+          if (std::find(best_splits.begin(), best_splits.end(), g) == best_splits.end() && best_splits.size() < 4) {
+            auto s2 = best_splits;
+            s2.insert(std::upper_bound(s2.begin(), s2.end(), g), g);
+            moves.push_back(s2);
+          }
+        for (std::size_t i = 0; i < best_splits.size(); ++i) {
+          auto s2 = best_splits;
+          s2.erase(s2.begin() + static_cast<std::ptrdiff_t>(i));
+          moves.push_back(s2);
         }
+        bool improved = false;
+        std::vector<std::size_t> next;
+        for (const auto& s2 : moves) {
+          ReconParams p;
+          const std::uint64_t class_bits = with_classes(s2, p);
+          p.peel = peel;
+          if (consider(p, class_bits)) improved = true, next = s2;
+        }
+        if (!improved) break;
+        best_splits = next;
       }
     }
   }
