@@ -391,7 +391,7 @@ int main(int argc, char** argv) {
               params.filters[3], params.filters[4], params.filters[5]);
   std::printf("\"classes\": %zu, \"scale_rank\": %u, \"peel\": %s, \"toggles\": %zu, \"mismatches\": %llu, "
               "\"rcon_bytes\": %zu, \"rcon_bits_per_point\": %.3f, ",
-              params.multipliers.size(), params.scale_rank, params.peel ? "true" : "false", params.toggles.size(),
+              params.multipliers.size(), params.scale_rank, params.peel ? "true" : "false", toggle_count(params),
               static_cast<unsigned long long>(rep.mismatches_before_toggles), rcon_bytes,
               8.0 * static_cast<double>(rcon_bytes) / static_cast<double>(pts.size()));
   std::printf("\"seconds\": {\"delaunay\": %.3f, \"truth\": %.3f, \"tune\": %.3f, \"reconstruct\": %.3f}, ", secs(t0, t1),

@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x04"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x05"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -401,18 +401,48 @@ def vqtb_payload(entries, dimension=3):
     return bytes([dimension]) + varint(len(entries)) + b"".join(svarint(v) for e in entries for v in e)
 
 
+def rice_bits(bw, ranks, k=None):
+    """§10.2: one context's count, Rice parameter and gap codes."""
+    bw.ue(len(ranks))
+    if not ranks:
+        return
+    gaps = [v - p - 1 for p, v in zip([-1] + list(ranks[:-1]), ranks)]
+    if k is None:
+        k = min(range(32), key=lambda r: sum((g >> r) + 1 + r for g in gaps))
+    bw.put(k, 5)
+    for g in gaps:
+        bw.put((1 << (g >> k)) - 1, g >> k)  # q one bits
+        bw.put(0, 1)
+        bw.put(g & ((1 << k) - 1), k)
+
+
 def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, border=(), toggles=(),
-                 drops=(), class_code_bits=None, filters=None, mask=None):
+                 drops=(), class_code_bits=None, filters=None, mask=None, compact=False, group=1, toggle_bits=None):
     """§10. classes: the class of each of the n points (needed when K > 1);
-    filters: {filter number: threshold}."""
+    filters: {filter number: threshold}. compact: flag bit 2, classes in
+    groups of `group` points (10.1) and `toggles` as {context: ranks} (10.2),
+    or the toggle bit stream as given in `toggle_bits`."""
     filters = filters or {}
     if mask is None:
         mask = sum(1 << i for i in filters)
+    if compact:
+        flags |= 4
     out = bytes([flags, scale_rank, mask]) + b"".join(varint(filters[i]) for i in sorted(filters))
     out += varint(len(multipliers)) + b"".join(varint(m) for m in multipliers)
     if len(multipliers) > 1:
         if class_code_bits is not None:
             out += class_code_bits
+        elif compact:
+            K = len(multipliers)
+            padded = list(classes) + [0] * (-len(classes) % group)
+            symbols = [sum(padded[b + i] * K ** i for i in range(group)) for b in range(0, len(padded), group)]
+            bw = BitWriter()
+            bw.put(group - 1, 3)
+            c = Coder(symbols, K ** group)
+            c.table(bw)
+            for s in symbols:
+                c.put(bw, s)
+            out += bw.bytes()
         else:
             bw = BitWriter()
             c = Coder(classes, len(multipliers))
@@ -429,33 +459,23 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
             prev = v
         return b
 
-    return out + gaps(border) + gaps(toggles) + gaps(drops)
+    if not compact:
+        return out + gaps(border) + gaps(toggles) + gaps(drops)
+    if toggle_bits is None:
+        bw = BitWriter()
+        toggles = toggles or {}
+        for j in range(8):
+            rice_bits(bw, sorted(toggles.get(j, ())))
+        toggle_bits = bw.bytes()
+    return out + gaps(border) + gaps(drops) + toggle_bits
 
 
 def describe_rcon(payload, n):
-    """Fields of an RCON for case.json."""
-    r = refdec.ByteReader(payload, "bad_layer", "RCON")
-    flags, k, mask = r.u8(), r.u8(), r.u8()
-    filters = {str(i): r.varint() for i in range(6) if mask >> i & 1}
-    K = r.varint()
-    mult = [r.varint() for _ in range(K)]
-    counts = [n] if K == 1 else None
-    if K > 1:
-        br = refdec.BitReader(payload, r.pos, "bad_layer", "RCON")
-        code = refdec.read_code(br, K)
-        counts = [0] * K
-        for _ in range(n):
-            counts[code.decode(br, "bad_layer")] += 1
-        r.pos = br.pad()
-    lists = []
-    for _ in range(3):
-        c = r.varint()
-        for _ in range(c):
-            r.varint()
-        lists.append(c)
-    return {"peel": flags & 1, "repair": flags >> 1 & 1, "scale_rank": k, "filters": filters,
-            "multipliers": mult, "class_members": counts,
-            "border": lists[0], "toggles": lists[1], "drops": lists[2]}
+    """Fields of an RCON for case.json (toggles: one count, or one per
+    context in the compact form)."""
+    d = refdec.parse_rcon(payload, n)
+    d["filters"] = {str(i): t for i, t in sorted(d["filters"].items())}
+    return d
 
 
 def describe_refn(payload):
@@ -932,6 +952,32 @@ def hb_rcon_volume():
     return hand_stream(2, q, lv, [(1, 2, True)], rcons=[rc0, rc1], origin=(1e6, -1e6, 0.0), step=1.0 / 3.0)
 
 
+def hb_rcon_compact_surface():
+    q = 6
+    pts = sphere_pts(150, q, 31)
+    lv = nested(pts, [60, 150], 32)
+    n0, n1 = len(lv[0]), len(lv[1])
+    r = random.Random(33)
+    rc0 = rcon_payload(n0, flags=1, multipliers=(400, 900, 3000), compact=True, group=3,
+                       classes=[0 if r.random() < 0.7 else r.choice((1, 2)) for _ in range(n0)],
+                       toggles={0: (0, 9), 2: (1, 2, 3, 13), 6: (4, 5), 7: (0,)}, border=(2, 3, 8), drops=(1, 30))
+    rc1 = rcon_payload(n1, flags=1, multipliers=(1024, 2048), compact=True, group=8,
+                       classes=[1 if i % 11 == 0 else 0 for i in range(n1)],
+                       toggles={1: (6,), 4: (0, 100, 253), 6: (0, 1, 2, 3, 4, 5, 6, 7, 8)})
+    return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
+
+
+def hb_rcon_compact_volume():
+    q = 5
+    pts = rand_pts(120, q, 34)
+    lv = nested(pts, [50, 120], 35)
+    n0, n1 = len(lv[0]), len(lv[1])
+    rc0 = rcon_payload(n0, flags=3, scale_rank=4, multipliers=(600,), compact=True, toggles={4: (0,), 5: (2, 3, 8), 7: (0, 4)})
+    rc1 = rcon_payload(n1, flags=0, scale_rank=8, multipliers=tuple(range(100, 100 + 64 * 40, 40)), compact=True,
+                       group=2, classes=[(i * 5) % 64 for i in range(n1)], toggles={1: (7, 89), 4: (0, 397), 7: (1,)})
+    return hand_stream(2, q, lv, [(1, 2, True)], rcons=[rc0, rc1])
+
+
 def hb_refn_tiny_coarse():
     pts = rand_pts(40, 6, 13)
     lv = nested(pts, [2, 5, 40], 14)
@@ -1071,6 +1117,10 @@ HANDBUILT = [
      "hand-built layers on a lattice: many equidistant neighbours and equal keys", sec("refn")),
     ("rcon-handbuilt-surface", hb_rcon_surface, F,
      "hand-written RCON: peel and repair off and on, filters 0, 2, 3 then all six, K = 3 and 2 (class bit streams), border, toggle and drop lists; origin and step not the encoder's", sec("rcon", "recon", "sqnt")),
+    ("rcon-compact-surface", hb_rcon_compact_surface, F,
+     "hand-written compact RCON (flag bit 2): classes in groups of 3 and 8 points, toggle ranks in five contexts, border and drop lists", sec("rcon", "recon")),
+    ("rcon-compact-volume", hb_rcon_compact_volume, F,
+     "hand-written compact RCON for a volume: repair then toggles by context, K = 64 in groups of 2 (4096 symbols)", sec("rcon", "recon")),
     ("rcon-handbuilt-volume", hb_rcon_volume, F,
      "hand-written RCON for a volume: repair, filters 1, 4 and 5, K = 1 and K = 64, scale rank 1 and 10, toggles", sec("rcon", "recon")),
 ]
@@ -1315,8 +1365,30 @@ NEGATIVE = [
     ("neg-refn-count", "bad_layer", P, "a REFN adding two points where one is declared", ["8A.1", "13"],
      lambda: stream_q1_refn(refn_single(8))),
     # RCON
-    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x04 (a reserved bit)", ["10", "13"],
-     lambda: surface_one_level(rcon_payload(30, flags=4))),
+    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x08 (a reserved bit)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, flags=8))),
+    ("neg-rcon-class-alphabet", "bad_layer", P, "compact classes: K = 17 in groups of 3 (4913 symbols > 4096)", ["10.1", "13"],
+     lambda: surface_one_level(rcon_payload(30, multipliers=tuple(range(300, 317)), compact=True,
+                                            class_code_bits=bits_payload(lambda bw: (bw.put(2, 3), bw.put(1, 1), bw.put(0, 13)))))),
+    ("neg-rcon-class-beyond-last", "bad_layer", P, "compact classes in groups of 4 over 30 points: the last group gives class 1 to a 31st point", ["10.1", "13"],
+     lambda: surface_one_level(rcon_payload(30, multipliers=(300, 600), compact=True,
+                                            class_code_bits=bits_payload(lambda bw: (bw.put(3, 3), bw.put(1, 1), bw.put(4, 4)))))),
+    ("neg-rcon-toggle-count-bits", "bad_layer", P, "compact toggles: a count larger than the bits left", ["10.2", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True, toggle_bits=bits_payload(lambda bw: (bw.ue(0), bw.ue(40)))))),
+    ("neg-rcon-toggle-rank-2e32", "bad_layer", P, "compact toggles: a rank of 2^32 - 1, Rice parameter 31", ["10.2", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True, toggle_bits=bits_payload(
+         lambda bw: (bw.ue(1), bw.put(31, 5), bw.put(1, 1), bw.put(0, 1), bw.put(2**31 - 1, 31), [bw.ue(0) for _ in range(7)]))))),
+    ("neg-rcon-toggle-unary-2e32", "bad_layer", P, "compact toggles: a Rice quotient that reaches 2^32 - 1 before its end (parameter 30, four 1 bits)", ["10.2", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True, toggle_bits=bits_payload(
+         lambda bw: (bw.ue(1), bw.put(30, 5), bw.put(15, 4), bw.put(0, 31), [bw.ue(0) for _ in range(7)]))))),
+    ("neg-rcon-toggle-cut", "bad_layer", P, "compact toggles: the bit stream ends inside the seventh context's count", ["10.2", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True, toggle_bits=bits_payload(
+         lambda bw: ([bw.ue(0) for _ in range(6)], bw.put(0, 2)))))),
+    ("neg-rcon-toggle-padding", "bad_layer", P, "compact toggles: one rank (Rice parameter 1), then non-zero padding", ["1", "10.2", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True, toggle_bits=(lambda bw: (
+         bw.ue(1), bw.put(1, 5), bw.put(0, 2), [bw.ue(0) for _ in range(7)], bw.bytes(pad_bit=1)))(BitWriter())[-1]))),
+    ("neg-rcon-toggle-trailing", "bad_layer", P, "compact toggles: a byte after the bit stream", ["10.2", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True) + b"\x00")),
     ("neg-rcon-filter-mask", "bad_layer", P, "RCON filter_mask bit 6 (reserved)", ["10", "13"],
      lambda: surface_one_level(rcon_payload(30, filters={0: 300}, mask=0x41))),
     ("neg-rcon-threshold-0", "bad_layer", P, "a filter threshold of 0", ["10", "13"],
@@ -1359,6 +1431,7 @@ NEGATIVE = [
      lambda: join(SIG + VERSION, [["HEAD", head_payload(1, [1])], ["SQNT", sqnt_payload(1)], ["RCON", rcon_payload(1)],
                                       ["BASE", base_payload([(0, 0, 0)], 1)], ["HEND", b""]])),
     ("neg-rcon-toggle-range", "bad_layer", F, "a toggle index equal to the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
+    ("neg-rcon-toggle-rank-range", "bad_layer", F, "a compact toggle rank equal to the number of tetrahedra of its context (full profile only)", ["10.2", "11.5", "13"], None),
     ("neg-rcon-drop-range", "bad_layer", F, "a drop index equal to four times the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
 ]
 
@@ -1426,12 +1499,15 @@ LATE = {
 }
 
 
-def toggle_range_stream(drops=False):
+def toggle_range_stream(drops=False, rank=False):
     """A surface on the 8 corners of the unit cube, whose tetrahedralization
-    has 6 tetrahedra (delaunay.md §3.3): toggle 6 or drop 24 is out of range."""
+    has 6 tetrahedra (delaunay.md §3.3): toggle 6 or drop 24 is out of range,
+    and so is rank 6 in every context, since no context has more than 6."""
     pts = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
     if drops:
         rc = rcon_payload(8, drops=(24,))
+    elif rank:
+        rc = rcon_payload(8, compact=True, toggles={j: (6,) for j in range(8)})
     else:
         rc = rcon_payload(8, toggles=(6,))
     return surface_one_level(rc, pts=pts, q=1)
@@ -1517,6 +1593,9 @@ def build(hmc, out):
             builder = LATE[name]
         if name == "neg-rcon-toggle-range":
             data = toggle_range_stream()
+            meta["built_by"] = "generate.py toggle_range_stream"
+        elif name == "neg-rcon-toggle-rank-range":
+            data = toggle_range_stream(rank=True)
             meta["built_by"] = "generate.py toggle_range_stream"
         elif name == "neg-rcon-drop-range":
             data = toggle_range_stream(drops=True)

@@ -495,8 +495,9 @@ def decode_vq(payload, q, coarse, n, codebook):
 def parse_rcon(payload, n):
     r = ByteReader(payload, "bad_layer", "RCON")
     flags = r.u8()
-    if flags & 0xFC:
+    if flags & 0xF8:
         r.fail("reserved flag bits set (flags = %d)" % flags)
+    compact = flags >> 2 & 1
     k = r.u8()
     if not 1 <= k <= 64:
         r.fail("scale_rank %d out of range" % k)
@@ -523,12 +524,28 @@ def parse_rcon(payload, n):
         if mult and m <= mult[-1]:
             r.fail("multipliers not strictly increasing")
         mult.append(m)
+    counts = [n] + [0] * (K - 1)
     if K > 1:
-        br = BitReader(payload, r.pos, "bad_layer", "RCON classes")
-        code = read_code(br, K)
         counts = [0] * K
-        for _ in range(n):
-            counts[code.decode(br, "bad_layer")] += 1
+        br = BitReader(payload, r.pos, "bad_layer", "RCON classes")
+        if compact:  # §10.1: classes in groups of G points, digits base K
+            G = br.bits(3) + 1
+            A = K ** G
+            if A > 4096:
+                raise DecodeError("bad_layer", "RCON: %d classes in groups of %d make %d > 4096 symbols" % (K, G, A))
+            code = read_code(br, A)
+            for b in range((n + G - 1) // G):
+                s = code.decode(br, "bad_layer")
+                for i in range(G):
+                    if b * G + i < n:
+                        counts[s % K] += 1
+                    elif s % K:
+                        raise DecodeError("bad_layer", "RCON: a class group gives a class to a point beyond the last")
+                    s //= K
+        else:
+            code = read_code(br, K)
+            for _ in range(n):
+                counts[code.decode(br, "bad_layer")] += 1
         r.pos = br.pad()
 
     def index_list(what, limit):
@@ -549,11 +566,39 @@ def parse_rcon(payload, n):
             prev = v
         return out
 
-    index_list("border", n)
-    index_list("toggle", None)  # checked against the tetrahedra only when reconstructing
-    index_list("drop", None)
-    r.end()
-    return {"peel": flags & 1, "repair": flags >> 1 & 1, "scale_rank": k, "filters": thresholds, "multipliers": mult}
+    border = index_list("border", n)
+    toggles = [0] * 8
+    if not compact:
+        toggles = len(index_list("toggle", None))  # checked against the tetrahedra only when reconstructing
+        drops = index_list("drop", None)
+        r.end()
+    else:
+        drops = index_list("drop", None)
+        # §10.2: per context, a count and Rice-coded gaps of ranks; the ranks
+        # are checked against the contexts only when reconstructing.
+        br = BitReader(payload, r.pos, "bad_layer", "RCON toggles")
+        for j in range(8):
+            count = toggles[j] = br.ue()
+            if count > len(payload) * 8 - br.pos:
+                raise DecodeError("bad_layer", "RCON: toggle count %d of context %d above the bits left" % (count, j))
+            if count == 0:
+                continue
+            k = br.bits(5)
+            prev = -1
+            for _ in range(count):
+                q = 0
+                while br.bit() == 1:
+                    q += 1
+                    if q << k >= INDEX_BOUND:
+                        raise DecodeError("bad_layer", "RCON: toggle rank of context %d >= 2^32 - 1" % j)
+                v = prev + 1 + (q << k) + br.bits(k)
+                if v >= INDEX_BOUND:
+                    raise DecodeError("bad_layer", "RCON: toggle rank %d of context %d >= 2^32 - 1" % (v, j))
+                prev = v
+        br.finish()
+    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "scale_rank": k, "filters": thresholds,
+            "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
+            "drops": len(drops)}
 
 
 # ---------------------------------------------------------------- §2, §3, §12 container

@@ -10,6 +10,7 @@
 
 #include "codec/format.hpp"
 #include "container/container.hpp"
+#include "entropy/bitio.hpp"
 #include "delaunay/delaunay.hpp"
 #include "delaunay/predicates.hpp"
 #include "hmc/codec.hpp"
@@ -307,7 +308,7 @@ TEST_CASE("RCON syntax errors are bad_layer, misplaced RCON is bad_chunk") {
   CHECK(with_recon(ok) == Status::ok);
   {
     Chunks c = base;
-    c.list[r].second[0] = 4;  // reserved flag
+    c.list[r].second[0] = 8;  // reserved flag
     CHECK(status(c) == Status::bad_layer);
     c = base;
     c.list[r].second[1] = 0;  // scale rank 0
@@ -327,11 +328,39 @@ TEST_CASE("RCON syntax errors are bad_layer, misplaced RCON is bad_chunk") {
   p.border = {static_cast<std::uint32_t>(n)};
   CHECK(with_recon(p) == Status::bad_layer);  // border index out of range
   p = ok;
+  p.compact = false;
   p.toggles = {100000000};
   CHECK(with_recon(p) == Status::bad_layer);  // no such tetrahedron
+  p = ok;
+  p.toggle_ranks[3] = {100000000};
+  CHECK(with_recon(p) == Status::bad_layer);  // no such rank in its context
+  for (int j = 0; j < kToggleContexts; ++j) {
+    CAPTURE(j);
+    // One past the last tetrahedron of each context: count the context.
+    const auto dt = delaunay(e.points);
+    const auto labels = rule_labels(e.points, dt, local_scale(e.points, dt, 6), ReconParams{});
+    const auto ctx = toggle_contexts(dt, labels);
+    const auto size = static_cast<std::uint32_t>(std::count(ctx.begin(), ctx.end(), j));
+    p = ok;
+    p.toggle_ranks[static_cast<std::size_t>(j)] = {size};
+    CHECK(with_recon(p) == Status::bad_layer);
+    if (size == 0) continue;
+    p.toggle_ranks[static_cast<std::size_t>(j)] = {size - 1};
+    CHECK(with_recon(p) == Status::ok);
+  }
   {
     ByteWriter w;
     w.u8(1), w.u8(6), w.varint(1), w.varint(512), w.varint(0), w.varint(1000);  // 1000 toggles, no bytes
+    Chunks c = base;
+    c.list[r].second = w.data();
+    CHECK(status(c) == Status::bad_layer);
+  }
+  {
+    // Compact form: border and drops, then a toggle count of 1000 with no
+    // bits to hold them.
+    ByteWriter w;
+    w.u8(5), w.u8(6), w.u8(0), w.varint(1), w.varint(512), w.varint(0), w.varint(0);
+    w.u8(0x00), w.u8(0x7d), w.u8(0x20);  // ue(1000) = 0000000001 111101001
     Chunks c = base;
     c.list[r].second = w.data();
     CHECK(status(c) == Status::bad_layer);
@@ -458,4 +487,115 @@ TEST_CASE("repair puts every point on the surface without changing its topology"
   auto dec = decode(enc.bytes.data(), enc.bytes.size()).value();
   REQUIRE(dec.levels.size() == enc.levels.size());
   for (std::size_t i = 0; i < dec.levels.size(); ++i) CHECK(dec.levels[i].triangles == enc.levels[i].triangles);
+}
+
+namespace {
+
+ReconParams read_payload(const std::vector<std::uint8_t>& payload, std::uint64_t points) {
+  ChunkView c;
+  c.type = kRecon;
+  c.payload = payload.data();
+  c.length = static_cast<std::uint32_t>(payload.size());
+  return read_recon(c, points);
+}
+
+Status payload_status(const std::vector<std::uint8_t>& payload, std::uint64_t points) {
+  try {
+    read_payload(payload, points);
+  } catch (const StreamError& err) {
+    return err.error().status;
+  }
+  return Status::ok;
+}
+
+}  // namespace
+
+TEST_CASE("compact RCON: toggles by context decode to the same mesh as toggles by index") {
+  EncodeOptions o;
+  o.fidelity = Fidelity::exact;  // the torus's cocircular quads need toggles
+  const auto e = encode(samples::torus(24, 12), o).value();
+  REQUIRE(e.report.levels.back().label_corrections > 0);
+  Chunks c = chunks_of(e.bytes);
+  const std::size_t r = c.index(kRecon);
+  REQUIRE(r < c.list.size());
+  const ReconParams compact = read_payload(c.list[r].second, e.points.size());
+  REQUIRE(compact.compact);
+  CHECK(toggle_count(compact) == e.report.levels.back().label_corrections);
+
+  // The same corrections as tetrahedron indices (the form of spec 0.4).
+  const auto dt = delaunay(e.points);
+  auto labels = rule_labels(e.points, dt, local_scale(e.points, dt, compact.scale_rank), compact);
+  if (compact.repair) repair_labels(dt, Kind::surface, labels);
+  auto toggled = labels;
+  apply_toggles(dt, compact, toggled);
+  ReconParams legacy = compact;
+  legacy.compact = false;
+  legacy.toggle_ranks = {};
+  for (std::size_t t = 0; t < labels.size(); ++t)
+    if (labels[t] != toggled[t]) legacy.toggles.push_back(static_cast<std::uint32_t>(t));
+  CHECK(legacy.toggles.size() == e.report.levels.back().label_corrections);
+  CHECK(toggle_ranks(dt, labels, legacy.toggles) == compact.toggle_ranks);
+
+  // Both forms decode to the encoder's triangles; the compact one is smaller.
+  const auto legacy_bytes = write_recon(legacy);
+  CHECK(legacy_bytes.size() > c.list[r].second.size());
+  const auto d_compact = decode(e.bytes.data(), e.bytes.size()).value();
+  c.list[r].second = legacy_bytes;
+  const auto b = c.bytes();
+  const auto d_legacy = decode(b.data(), b.size()).value();
+  CHECK(d_compact.levels.back().triangles == e.triangles);
+  CHECK(d_legacy.levels.back().triangles == e.triangles);
+}
+
+TEST_CASE("compact RCON: classes in groups survive a round trip and their errors are bad_layer") {
+  std::uint64_t seed = 7;
+  auto next = [&]() { return seed = seed * 6364136223846793005ull + 1442695040888963407ull, seed >> 33; };
+  for (std::uint32_t k : {2u, 3u, 5u, 64u}) {
+    for (std::uint64_t n : {1u, 2u, 7u, 100u, 1001u}) {
+      CAPTURE(k);
+      CAPTURE(n);
+      ReconParams p;
+      p.multipliers.clear();
+      for (std::uint32_t i = 0; i < k; ++i) p.multipliers.push_back(100 + 10 * i);
+      p.vertex_class.resize(n);
+      // Skewed classes, so that groups pay off.
+      for (auto& v : p.vertex_class) v = static_cast<std::uint8_t>(next() % 8 < 6 ? 0 : next() % k);
+      p.toggle_ranks[0] = {0, 5, 6, 900};
+      p.toggle_ranks[6] = {3};
+      const auto back = read_payload(write_recon(p), n);
+      CHECK(back.vertex_class == p.vertex_class);
+      CHECK(back.toggle_ranks == p.toggle_ranks);
+      CHECK(back.compact);
+    }
+  }
+  // K = 2, groups of 2 (alphabet 4), a one-symbol code: symbol s gives the
+  // classes of two points; 3 points need two groups.
+  auto payload = [](std::uint32_t classes, std::uint32_t group, std::uint32_t symbol, int width) {
+    ByteWriter w;
+    w.u8(5), w.u8(6), w.u8(0), w.varint(classes);
+    for (std::uint32_t i = 0; i < classes; ++i) w.varint(300 + i);
+    BitWriter bw;
+    bw.put(group - 1, 3);
+    bw.put(1, 1), bw.put(symbol, width);  // one-symbol code
+    w.bytes(bw.finish());
+    w.varint(0), w.varint(0);  // border, drops
+    w.u8(0xff);                // eight empty toggle contexts: ue(0) eight times
+    return w.data();
+  };
+  CHECK(payload_status(payload(2, 2, 1, 2), 3) == Status::ok);
+  CHECK(read_payload(payload(2, 2, 1, 2), 3).vertex_class == std::vector<std::uint8_t>{1, 0, 1});
+  CHECK(payload_status(payload(2, 2, 3, 2), 3) == Status::bad_layer);  // a class for a 4th point
+  CHECK(payload_status(payload(2, 2, 3, 2), 4) == Status::ok);
+  CHECK(payload_status(payload(64, 2, 0, 12), 4) == Status::ok);         // 64^2 = 4096 symbols
+  CHECK(payload_status(payload(64, 3, 0, 12), 4) == Status::bad_layer);  // 64^3 > 4096
+  {
+    auto bytes = payload(2, 1, 1, 1);
+    bytes.back() = 0xfe;  // context 7's count starts (0...), then the bit stream ends
+    CHECK(payload_status(bytes, 3) == Status::bad_layer);
+    bytes.push_back(0x80);  // ue(1) = 010 completed, k = 00000, gap 0, padding: ranks {0}
+    const auto p = read_payload(bytes, 3);
+    CHECK(p.toggle_ranks[7] == std::vector<std::uint32_t>{0});
+    bytes.push_back(0x00);  // a byte after the bit stream
+    CHECK(payload_status(bytes, 3) == Status::bad_layer);
+  }
 }

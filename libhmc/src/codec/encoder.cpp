@@ -213,7 +213,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   TuningReport tr;
   plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
   plan.rec = reconstruct(plan.points, dt, kind, plan.params);
-  plan.report.label_corrections = plan.params.toggles.size();
+  plan.report.label_corrections = toggle_count(plan.params);
   plan.report.rule_mismatches = tr.mismatches_before_toggles;
 }
 

@@ -150,11 +150,130 @@ std::vector<std::uint32_t> read_index_list(ByteReader& r, std::uint64_t bound, c
   return list;
 }
 
+// Every RCON index and rank is below 2^32 - 1 (spec section 10).
+constexpr std::uint64_t kIndexBound = 0xffffffffu;
+// Largest alphabet of a group of classes (spec section 10).
+constexpr std::uint64_t kMaxClassAlphabet = 4096;
+
+std::uint32_t class_alphabet(std::uint32_t classes, int group) {
+  std::uint64_t a = 1;
+  for (int i = 0; i < group; ++i) a *= classes;
+  return a > kMaxClassAlphabet ? 0 : static_cast<std::uint32_t>(a);
+}
+
+// Symbols of the class stream with `group` classes per symbol.
+std::vector<std::uint32_t> class_symbols(const std::vector<std::uint8_t>& cls, std::uint32_t classes, int group) {
+  std::vector<std::uint32_t> sym((cls.size() + static_cast<std::size_t>(group) - 1) / static_cast<std::size_t>(group), 0);
+  for (std::size_t b = 0; b < sym.size(); ++b) {
+    std::uint32_t s = 0;
+    for (int i = group - 1; i >= 0; --i) {
+      const std::size_t v = b * static_cast<std::size_t>(group) + static_cast<std::size_t>(i);
+      s = s * classes + (v < cls.size() ? cls[v] : 0u);
+    }
+    sym[b] = s;
+  }
+  return sym;
+}
+
+// Classes in groups (spec section 10, compact form): the group size that
+// gives the shortest stream, then one code over the groups.
+std::vector<std::uint8_t> write_class_groups(const std::vector<std::uint8_t>& cls, std::uint32_t classes) {
+  std::vector<std::uint8_t> best;
+  for (int group = 1; group <= 8; ++group) {
+    const std::uint32_t alphabet = class_alphabet(classes, group);
+    if (alphabet == 0) break;
+    const auto sym = class_symbols(cls, classes, group);
+    std::vector<std::uint64_t> freq(alphabet, 0);
+    for (auto s : sym) ++freq[s];
+    const auto code = HuffmanCode::from_frequencies(freq);
+    BitWriter bw;
+    bw.put(static_cast<std::uint32_t>(group - 1), 3);
+    code.write(bw);
+    for (auto s : sym) code.encode(bw, s);
+    auto bytes = bw.finish();
+    if (best.empty() || bytes.size() < best.size()) best = std::move(bytes);
+  }
+  return best;
+}
+
+std::vector<std::uint8_t> read_class_groups(BitReader& br, std::uint32_t classes, std::uint64_t points) {
+  const int group = static_cast<int>(br.get(3)) + 1;
+  const std::uint32_t alphabet = class_alphabet(classes, group);
+  if (alphabet == 0)
+    fail(Status::bad_layer, "RCON: " + std::to_string(classes) + " classes in groups of " + std::to_string(group) +
+                                " make an alphabet over 4096");
+  const auto code = HuffmanCode::read(br, alphabet, "RCON class table");
+  std::vector<std::uint8_t> cls(points);
+  for (std::uint64_t b = 0; b * static_cast<std::uint64_t>(group) < points; ++b) {
+    std::uint32_t s = code.decode(br);
+    for (int i = 0; i < group; ++i, s /= classes) {
+      const std::uint64_t v = b * static_cast<std::uint64_t>(group) + static_cast<std::uint64_t>(i);
+      if (v < points) {
+        cls[v] = static_cast<std::uint8_t>(s % classes);
+      } else if (s % classes != 0) {
+        fail(Status::bad_layer, "RCON: a class group gives a class to a point beyond the last");
+      }
+    }
+  }
+  return cls;
+}
+
+// Toggle ranks per context (spec section 10, compact form): a count, and
+// the gaps between ranks with a Rice code whose parameter the encoder picks.
+std::vector<std::uint8_t> write_toggle_ranks(const std::array<std::vector<std::uint32_t>, kToggleContexts>& ranks) {
+  BitWriter bw;
+  for (const auto& list : ranks) {
+    bw.exp_golomb(static_cast<std::uint32_t>(list.size()));
+    if (list.empty()) continue;
+    std::vector<std::uint64_t> gaps;
+    std::uint64_t next = 0;
+    for (std::uint32_t v : list) gaps.push_back(v - next), next = std::uint64_t{v} + 1;
+    int best_k = 0;
+    std::uint64_t best_bits = ~std::uint64_t{0};
+    for (int k = 0; k < 32; ++k) {
+      std::uint64_t bits = 0;
+      for (auto g : gaps) bits += (g >> k) + 1 + static_cast<std::uint64_t>(k);
+      if (bits < best_bits) best_bits = bits, best_k = k;
+    }
+    bw.put(static_cast<std::uint32_t>(best_k), 5);
+    for (auto g : gaps) {
+      for (std::uint64_t q = g >> best_k; q > 0; --q) bw.put(1, 1);
+      bw.put(0, 1);
+      if (best_k > 0) bw.put(static_cast<std::uint32_t>(g & ((std::uint64_t{1} << best_k) - 1)), best_k);
+    }
+  }
+  return bw.finish();
+}
+
+std::array<std::vector<std::uint32_t>, kToggleContexts> read_toggle_ranks(BitReader& br) {
+  std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
+  for (auto& list : ranks) {
+    const std::uint64_t count = br.exp_golomb();
+    // Each entry takes at least one bit.
+    if (count > br.bits_left())
+      fail(Status::bad_layer, "RCON: toggle count " + std::to_string(count) + " is larger than the bits left");
+    if (count == 0) continue;
+    const int k = static_cast<int>(br.get(5));
+    list.resize(count);
+    std::uint64_t next = 0;
+    for (auto& v : list) {
+      std::uint64_t q = 0;
+      while (br.get(1) == 1)
+        if ((++q << k) >= kIndexBound) fail(Status::bad_layer, "RCON: toggle rank out of range");
+      const std::uint64_t x = next + (q << k) + (k > 0 ? br.get(k) : 0u);
+      if (x >= kIndexBound) fail(Status::bad_layer, "RCON: toggle rank " + std::to_string(x) + " out of range");
+      v = static_cast<std::uint32_t>(x);
+      next = x + 1;
+    }
+  }
+  return ranks;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   ByteWriter w;
-  w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0)));
+  w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0)));
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
@@ -165,18 +284,27 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   w.varint(p.multipliers.size());
   for (std::uint32_t m : p.multipliers) w.varint(m);
   if (p.multipliers.size() > 1) {
-    std::vector<std::uint64_t> freq(p.multipliers.size(), 0);
-    for (auto c : p.vertex_class) ++freq[c];
-    const auto code = HuffmanCode::from_frequencies(freq);
-    BitWriter bw;
-    code.write(bw);
-    for (auto c : p.vertex_class) code.encode(bw, c);
-    w.bytes(bw.finish());
+    if (p.compact) {
+      w.bytes(write_class_groups(p.vertex_class, static_cast<std::uint32_t>(p.multipliers.size())));
+    } else {
+      std::vector<std::uint64_t> freq(p.multipliers.size(), 0);
+      for (auto c : p.vertex_class) ++freq[c];
+      const auto code = HuffmanCode::from_frequencies(freq);
+      BitWriter bw;
+      code.write(bw);
+      for (auto c : p.vertex_class) code.encode(bw, c);
+      w.bytes(bw.finish());
+    }
   }
   // Border vertices are only meaningful for surfaces; the list is empty otherwise.
   write_index_list(w, p.border);
-  write_index_list(w, p.toggles);
-  write_index_list(w, p.drops);
+  if (p.compact) {
+    write_index_list(w, p.drops);
+    w.bytes(write_toggle_ranks(p.toggle_ranks));
+  } else {
+    write_index_list(w, p.toggles);
+    write_index_list(w, p.drops);
+  }
   return std::move(w.data());
 }
 
@@ -184,9 +312,10 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
-  if (flags > 3) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
+  if (flags > 7) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
   p.peel = flags & 1;
   p.repair = (flags & 2) != 0;
+  p.compact = (flags & 4) != 0;
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");
@@ -211,14 +340,25 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
   }
   if (k > 1) {
     BitReader br(r.here(), r.remaining(), "RCON classes");
-    const auto code = HuffmanCode::read(br, static_cast<std::uint32_t>(k), "RCON class table");
-    p.vertex_class.resize(points);
-    for (auto& v : p.vertex_class) v = static_cast<std::uint8_t>(code.decode(br));
+    if (p.compact) {
+      p.vertex_class = read_class_groups(br, static_cast<std::uint32_t>(k), points);
+    } else {
+      const auto code = HuffmanCode::read(br, static_cast<std::uint32_t>(k), "RCON class table");
+      p.vertex_class.resize(points);
+      for (auto& v : p.vertex_class) v = static_cast<std::uint8_t>(code.decode(br));
+    }
     r.skip(br.align());
   }
   p.border = read_index_list(r, points, "border");
-  p.toggles = read_index_list(r, std::uint64_t{0xffffffffu}, "toggle");
-  p.drops = read_index_list(r, std::uint64_t{0xffffffffu}, "dropped face");
+  if (p.compact) {
+    p.drops = read_index_list(r, kIndexBound, "dropped face");
+    BitReader br(r.here(), r.remaining(), "RCON toggles");
+    p.toggle_ranks = read_toggle_ranks(br);
+    br.expect_end();
+    return p;
+  }
+  p.toggles = read_index_list(r, kIndexBound, "toggle");
+  p.drops = read_index_list(r, kIndexBound, "dropped face");
   if (!r.at_end()) fail(Status::bad_layer, "RCON: " + std::to_string(r.remaining()) + " unexpected byte(s) at the end");
   return p;
 }

@@ -611,16 +611,76 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
   return r;
 }
 
+std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside) {
+  std::vector<std::uint8_t> ctx(dt.tets.size());
+  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+    int faces = 0;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      faces += u == kNoTet ? inside[t] : inside[u] != inside[t];
+    }
+    ctx[t] = static_cast<std::uint8_t>(4 * inside[t] + std::min(faces, 3));
+  }
+  return ctx;
+}
+
+std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetrahedralization& dt,
+                                                                     const std::vector<std::uint8_t>& inside,
+                                                                     const std::vector<std::uint32_t>& toggled) {
+  const auto ctx = toggle_contexts(dt, inside);
+  std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
+  std::array<std::uint32_t, kToggleContexts> seen{};
+  std::size_t next = 0;
+  for (std::size_t t = 0; t < ctx.size(); ++t) {
+    if (next < toggled.size() && toggled[next] == t) {
+      ranks[ctx[t]].push_back(seen[ctx[t]]);
+      ++next;
+    }
+    ++seen[ctx[t]];
+  }
+  return ranks;
+}
+
+std::size_t toggle_count(const ReconParams& p) {
+  std::size_t n = p.toggles.size();
+  for (const auto& r : p.toggle_ranks) n += r.size();
+  return n;
+}
+
+void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vector<std::uint8_t>& inside) {
+  for (std::uint32_t t : p.toggles) {
+    if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
+  }
+  std::vector<std::uint32_t> flip(p.toggles);
+  if (p.compact) {
+    // All ranks refer to the labels before any toggle.
+    const auto ctx = toggle_contexts(dt, inside);
+    std::array<std::uint32_t, kToggleContexts> seen{};
+    std::array<std::size_t, kToggleContexts> next{};
+    for (std::size_t t = 0; t < ctx.size(); ++t) {
+      const int j = ctx[t];
+      if (next[j] < p.toggle_ranks[j].size() && p.toggle_ranks[j][next[j]] == seen[j]) {
+        flip.push_back(static_cast<std::uint32_t>(t));
+        ++next[j];
+      }
+      ++seen[j];
+    }
+    for (int j = 0; j < kToggleContexts; ++j)
+      if (next[j] < p.toggle_ranks[j].size())
+        fail(Status::bad_layer, "RCON: toggle rank " + std::to_string(p.toggle_ranks[j][next[j]]) + " of context " +
+                                    std::to_string(j) + " names no tetrahedron (the context has " +
+                                    std::to_string(seen[j]) + ")");
+  }
+  for (std::uint32_t t : flip) inside[t] ^= 1;
+}
+
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
                            const ReconParams& p) {
   if (kind == Kind::points) return {};
   const auto scale = local_scale(points, dt, p.scale_rank);
   auto inside = rule_labels(points, dt, scale, p);
   if (p.repair) repair_labels(dt, kind, inside);
-  for (std::uint32_t t : p.toggles) {
-    if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
-    inside[t] ^= 1;
-  }
+  apply_toggles(dt, p, inside);
   if (!p.drops.empty() && p.drops.back() / 4 >= inside.size())
     fail(Status::bad_layer, "RCON: dropped face " + std::to_string(p.drops.back()) + " does not exist");
   return extract(dt, kind, inside, p);

@@ -15,6 +15,10 @@
 
 namespace hmc::detail {
 
+/// Contexts of the compact toggle list (spec 11.5): a tetrahedron's label
+/// before toggles and how many of its faces lie on the interface (0-3+).
+constexpr int kToggleContexts = 8;
+
 /// Side information that drives the rule (the RCON chunk's content).
 struct ReconParams {
   /// Rank k of the local scale: s_v is the k-th smallest squared length of
@@ -38,8 +42,17 @@ struct ReconParams {
   std::array<std::uint32_t, 6> filters{};
   /// Border vertices of an open surface (sorted, distinct).
   std::vector<std::uint32_t> border;
-  /// Tetrahedra whose label is inverted after the rule (sorted, distinct).
+  /// Compact coding (RCON flag bit 2, spec 0.5): alpha classes in groups
+  /// and toggles as ranks within their context. Without it (streams up to
+  /// spec 0.4), toggles are tetrahedron indices.
+  bool compact = true;
+  /// Tetrahedra whose label is inverted after the rule (sorted, distinct);
+  /// only when !compact.
   std::vector<std::uint32_t> toggles;
+  /// When compact: per context j (toggle_context()), the ranks, sorted and
+  /// distinct, of the toggled tetrahedra among the tetrahedra of context j
+  /// in ascending index.
+  std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks;
   /// Surface faces left out of the output, as 4·tetrahedron + local face
   /// (sorted, distinct): faces across the holes of an open surface.
   std::vector<std::uint32_t> drops;
@@ -82,6 +95,24 @@ struct DefectScratch {
 int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                   const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work);
+
+/// Context of every tetrahedron for the compact toggle list (spec 11.5),
+/// from the labels before toggles: 4 · label + min(3, faces on the
+/// interface), a hull face counting for an inside tetrahedron.
+std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside);
+
+/// The toggled tetrahedra `toggled` (ascending) as ranks within their
+/// contexts under the labels before toggles (encoder side of the above).
+std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetrahedralization& dt,
+                                                                     const std::vector<std::uint8_t>& inside,
+                                                                     const std::vector<std::uint32_t>& toggled);
+
+/// Number of toggles `p` carries, in either form.
+std::size_t toggle_count(const ReconParams& p);
+
+/// Invert the labels `p` toggles (spec 11.5); bad_layer for an index or a
+/// rank that names no tetrahedron.
+void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vector<std::uint8_t>& inside);
 
 /// Surface or volume from final labels (toggles applied by the caller);
 /// of `p` only the border and drop lists are used.

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "entropy/huffman.hpp"
 #include "reconstruct/distance.hpp"
 #include "reconstruct/winding.hpp"
 
@@ -107,7 +106,7 @@ std::vector<std::uint32_t> hole_faces(const std::vector<GridPoint>& points, cons
                                       const ReconParams& p, const std::vector<Vec3>& surface_points,
                                       const std::vector<Triangle>& surface) {
   auto labels = rule_labels(points, dt, local_scale(points, dt, p.scale_rank), p);
-  for (auto t : p.toggles) labels[t] ^= 1;
+  apply_toggles(dt, p, labels);
   const SurfaceDistance to_input(surface_points, surface);
   const double tolerance = 1e-3 * bbox_diagonal(points);
   auto on_border = [&](std::uint32_t v) { return std::binary_search(p.border.begin(), p.border.end(), v); };
@@ -411,7 +410,11 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
         p.vertex_class[v] = static_cast<std::uint8_t>(it - p.multipliers.begin());
         ++freq[p.vertex_class[v]];
       }
-      return HuffmanCode::from_frequencies(freq).cost(freq) + 8 * p.multipliers.size();
+      // The classes travel in groups (spec section 10), at about their entropy.
+      double bits = 0;
+      for (auto f : freq)
+        if (f) bits -= static_cast<double>(f) * std::log2(static_cast<double>(f) / static_cast<double>(n));
+      return static_cast<std::uint64_t>(bits) + 8 * p.multipliers.size();
     };
     auto consider = [&](const ReconParams& p, std::uint64_t class_bits) {
       const std::uint64_t mism = cost(p, scale);
@@ -497,7 +500,8 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     const double tolerance = fidelity == Fidelity::exact ? -1.0
                              : in.shape_tolerance >= 0 ? in.shape_tolerance
                                                        : 1e-3 * bbox_diagonal(points);
-    auto labels = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
+    const auto rule = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
+    auto labels = rule;
     std::vector<std::uint8_t> toggled(nt, 0);
     for (std::size_t t = 0; t < nt; ++t)
       if (labels[t] != truth[t] && height(points, dt.tets[t]) > tolerance) toggled[t] = 1, labels[t] = truth[t];
@@ -555,11 +559,12 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
         repair_labels(dt, kind, cleaned);
         if (approximation_penalty(dt, cleaned, want_clean, in) < before) labels.swap(cleaned);
       }
-      const auto rule = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
       for (std::size_t t = 0; t < nt; ++t) toggled[t] = labels[t] != rule[t];
     }
+    std::vector<std::uint32_t> list;
     for (std::size_t t = 0; t < nt; ++t)
-      if (toggled[t]) best.toggles.push_back(static_cast<std::uint32_t>(t));
+      if (toggled[t]) list.push_back(static_cast<std::uint32_t>(t));
+    best.toggle_ranks = toggle_ranks(dt, rule, list);
   }
   // Hole caps are judged against the input only where the level follows it;
   // coarser levels keep the border rule alone.
