@@ -213,52 +213,59 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   for (std::uint32_t t = 0; t < nt; ++t)
     for (auto v : dt.tets[t]) incident[fill[v]++] = t;
   DefectScratch scratch;
-  auto exposed = [&](std::uint32_t t, int k) {
-    if (!inside[t]) return false;
+  // Is face k of t on the interface when t's label is `label`?
+  auto face_on = [&](std::uint32_t t, int k, bool label) {
     const std::uint32_t u = dt.neighbors[t][k];
-    return u == kNoTet || !inside[u];
+    return u == kNoTet ? label : label != (inside[u] != 0);
   };
-  // Is the edge (a, b) on a face of the interface? Faces containing it
-  // belong to tetrahedra incident to a.
-  auto edge_on = [&](std::uint32_t a, std::uint32_t b) {
-    for (std::uint32_t i = start[a]; i < start[a + 1]; ++i) {
-      const std::uint32_t t = incident[i];
-      const auto& tet = dt.tets[t];
-      if (tet[0] != b && tet[1] != b && tet[2] != b && tet[3] != b) continue;
-      for (int k = 0; k < 4; ++k)
-        if (tet[k] != a && tet[k] != b && exposed(t, k)) return true;
-    }
-    return false;
-  };
-  auto vertex_on = [&](std::uint32_t v) {
-    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
-      for (int k = 0; k < 4; ++k)
-        if (dt.tets[incident[i]][k] != v && exposed(incident[i], k)) return true;
-    return false;
-  };
-  // Euler characteristic of the interface restricted to t's own vertices,
-  // edges and faces: the only ones flipping t can change.
-  auto local_euler = [&](std::uint32_t t) {
+  // Is some face around the edge (tet[i], tet[j]) of t, other than t's own
+  // two, on the interface? Walks the ring of tetrahedra around the edge
+  // (both ways when the edge is on the hull).
+  auto ring_on = [&](std::uint32_t t, int i, int j) {
     const auto& tet = dt.tets[t];
-    int chi = 0;
-    for (auto v : tet) chi += vertex_on(v);
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) chi -= edge_on(tet[i], tet[j]);
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      const bool a = inside[t] != 0, b = u != kNoTet && inside[u];
-      chi += a != b;
+    const std::uint32_t a = tet[i], b = tet[j];
+    int other[2], m = 0;
+    for (int k = 0; k < 4; ++k)
+      if (k != i && k != j) other[m++] = k;
+    for (int dir = 0; dir < 2; ++dir) {
+      // Cross t's face opposite other[dir]; it holds a, b and c.
+      std::uint32_t prev = t, c = tet[other[1 - dir]];
+      std::uint32_t x = dt.neighbors[t][other[dir]];
+      while (x != t) {
+        if (x == kNoTet) {
+          if (prev != t && inside[prev]) return true;  // a hull face of prev
+          break;
+        }
+        if (prev != t && (inside[prev] != 0) != (inside[x] != 0)) return true;
+        const auto& xt = dt.tets[x];
+        int kc = 0;
+        std::uint32_t next_c = 0;
+        for (int k = 0; k < 4; ++k) {
+          if (xt[k] == c) kc = k;
+          else if (xt[k] != a && xt[k] != b) next_c = xt[k];
+        }
+        prev = x;
+        x = dt.neighbors[x][kc];
+        c = next_c;
+      }
+      if (x == t) break;  // a closed ring: every face seen
     }
-    return chi;
+    return false;
   };
   // defects(v) depends only on the labels of the tetrahedra around v (a
-  // face containing v lies between two of them), so it is cached and
-  // recomputed only after one of those flips.
+  // face containing v lies between two of them), so it is cached, with
+  // whether v is on the interface (bit 0), and recomputed only after one of
+  // those flips.
   std::vector<int> cache(n, -1);
-  auto defects = [&](std::uint32_t v) {
-    if (cache[v] < 0) cache[v] = local_defects(dt, inside, start, incident, want, v, scratch);
+  auto state = [&](std::uint32_t v) {
+    if (cache[v] < 0) {
+      bool on = false;
+      const int d = local_defects(dt, inside, start, incident, want, v, scratch, &on);
+      cache[v] = 2 * d + (on ? 1 : 0);
+    }
     return cache[v];
   };
+  auto defects = [&](std::uint32_t v) { return state(v) >> 1; };
   auto flip = [&](std::uint32_t t) {
     inside[t] ^= 1;
     for (auto v : dt.tets[t]) cache[v] = -1;
@@ -267,6 +274,26 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
     int d = 0;
     for (auto v : dt.tets[t]) d += defects(v);
     return d;
+  };
+  // Change of the interface's Euler characteristic restricted to t's own
+  // vertices, edges and faces (the only ones flipping t can change) when t
+  // flips from `from` to !from; on_before/on_after: t's vertices on the
+  // interface before and after.
+  auto euler_change = [&](std::uint32_t t, bool from, int on_before, int on_after) {
+    int chi = on_after - on_before;
+    for (int k = 0; k < 4; ++k) chi += face_on(t, k, !from) - face_on(t, k, from);
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        int f[2], m = 0;
+        for (int k = 0; k < 4; ++k)
+          if (k != i && k != j) f[m++] = k;
+        const bool before = face_on(t, f[0], from) || face_on(t, f[1], from);
+        const bool after = face_on(t, f[0], !from) || face_on(t, f[1], !from);
+        if (before == after) continue;  // the ring walk cannot change the answer
+        if (ring_on(t, i, j)) continue;
+        chi -= (after ? 1 : 0) - (before ? 1 : 0);
+      }
+    return chi;
   };
   // A try at t reads only the labels of tetrahedra incident to t's
   // vertices, all of them neighbours of v. So a vertex whose last visit
@@ -298,20 +325,18 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         auto restore = [&](const int (&c)[4]) {
           for (int k = 0; k < 4; ++k) cache[tv[k]] = c[k];
         };
+        const bool from = inside[t] != 0;
         flip(t);
         if (around(t) >= before) {  // most tries end here: no Euler check needed
           flip(t);
           restore(was);
           continue;
         }
-        const int now[4] = {cache[tv[0]], cache[tv[1]], cache[tv[2]], cache[tv[3]]};
-        const int chi_after = local_euler(t);
-        flip(t);
-        restore(was);
-        const int chi_before = local_euler(t);
-        flip(t);
-        restore(now);
-        if (chi_after == chi_before) {
+        int on_before = 0, on_after = 0;
+        for (int k = 0; k < 4; ++k) on_before += was[k] & 1, on_after += cache[tv[k]] & 1;
+        // Labels are flipped here: euler_change reads t's label from `from`
+        // only, its neighbours' from `inside`.
+        if (euler_change(t, from, on_before, on_after) == 0) {
           changed = kept = true;
           ++clock;
           for (auto w : dt.tets[t]) touched[w] = clock;
@@ -331,7 +356,7 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
 
 int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
-                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work) {
+                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work, bool* on) {
   std::vector<std::uint32_t>& scratch = work.ends;
   // scratch holds, for each interface face around v, its other two
   // vertices (a, b) as consecutive entries.
@@ -351,12 +376,23 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
     }
   }
   const std::size_t faces = scratch.size() / 2;
+  if (on) *on = faces > 0;
   if (faces == 0) return want[v] ? 1 : 0;
   // (w, face) for both ends w of every face's edges (v, w), sorted by w.
   std::vector<std::uint64_t>& ends = work.sorted;
   ends.resize(scratch.size());
   for (std::size_t i = 0; i < scratch.size(); ++i) ends[i] = (std::uint64_t{scratch[i]} << 32) | (i / 2);
-  std::sort(ends.begin(), ends.end());
+  if (ends.size() <= 48) {
+    // Usually a dozen entries: insertion sort beats std::sort here.
+    for (std::size_t i = 1; i < ends.size(); ++i) {
+      const std::uint64_t x = ends[i];
+      std::size_t j = i;
+      for (; j > 0 && ends[j - 1] > x; --j) ends[j] = ends[j - 1];
+      ends[j] = x;
+    }
+  } else {
+    std::sort(ends.begin(), ends.end());
+  }
   // Edges (v, w) used by other than two faces; fans: faces around v joined
   // through shared edges (v, w); more than one fan makes v a pinch point.
   std::vector<std::uint32_t>& parent = work.parent;

@@ -91,10 +91,11 @@ struct DefectScratch {
 /// two interface faces plus the fans of interface faces around v beyond the
 /// first. `start`/`incident`: the tetrahedra incident to each vertex
 /// (incident[start[v] .. start[v + 1])). Reads only the labels of the
-/// tetrahedra incident to v.
+/// tetrahedra incident to v. `on`, when given, receives whether v is on the
+/// interface.
 int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
-                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work);
+                  const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work, bool* on = nullptr);
 
 /// Context of every tetrahedron for the compact toggle list (spec 11.5),
 /// from the labels before toggles: 4 · label + min(3, faces on the
