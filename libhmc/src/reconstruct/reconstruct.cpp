@@ -303,6 +303,16 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   std::uint64_t clock = 1;
   constexpr std::uint64_t kNever = ~std::uint64_t{0};
   std::vector<std::uint64_t> touched(n, 0), failed_at(n, kNever);
+  // Likewise a try at t depends only on the labels of the tetrahedra
+  // incident to t's vertices, not on the vertex being mended: a try that
+  // failed fails again until a kept flip touches one of t's vertices.
+  std::vector<std::uint64_t> try_failed_at(nt, kNever);
+  auto same_try = [&](std::uint32_t t) {
+    if (try_failed_at[t] == kNever) return false;
+    for (auto w : dt.tets[t])
+      if (touched[w] > try_failed_at[t]) return false;
+    return true;
+  };
   auto unchanged_since = [&](std::uint32_t v, std::uint64_t when) {
     for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
       for (auto w : dt.tets[incident[i]])
@@ -317,6 +327,7 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
       bool kept = false;
       for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
         const std::uint32_t t = incident[i];
+        if (same_try(t)) continue;
         const auto& tv = dt.tets[t];
         const int before = around(t);
         // Flipping t back restores the labels, so also the cached defects
@@ -330,6 +341,7 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         if (around(t) >= before) {  // most tries end here: no Euler check needed
           flip(t);
           restore(was);
+          try_failed_at[t] = clock;
           continue;
         }
         int on_before = 0, on_after = 0;
@@ -344,6 +356,7 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         } else {
           flip(t);
           restore(was);
+          try_failed_at[t] = clock;
         }
       }
       failed_at[v] = kept ? kNever : clock;
