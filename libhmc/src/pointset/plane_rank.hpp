@@ -1,0 +1,37 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// The plane ranking of a node's children (spec "Refinement layer", 8A.1,
+// "Ranking of the children", shared by the ranked base-layer coder, 8.2):
+// children nearest to the plane fitted to the node's neighbours come first,
+// and occupancies are sent as ranked occupancies, ordered by number of set
+// bits, so likely symbols get small indices. Exact 64-bit integer arithmetic.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "hmc/codec.hpp"
+
+namespace hmc::detail {
+
+/// Non-zero occupancies ordered by number of set bits, then value (the list
+/// E of the spec): occupancy[s] is E[s], index[E[s]] = s.
+struct OccupancyOrder {
+  std::array<std::uint8_t, 256> index{};
+  std::array<std::uint8_t, 255> occupancy{};
+  OccupancyOrder();
+};
+const OccupancyOrder& occupancy_order();
+
+int popcount8(unsigned v);
+
+/// Point in doubled grid coordinates (below 2^22).
+using Doubled = std::array<std::int32_t, 3>;
+
+/// order[r] = the child of rank r of the node `node` (integer coordinates at
+/// depth d < q on a 2^q grid): children whose bit is set in `first_mask`
+/// first, then by distance of the child's centre to the plane fitted to the
+/// k `neighbours`, then by distance to their centroid, then by child number.
+void rank_children(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
+                   std::array<int, 8>& order);
+
+}  // namespace hmc::detail
