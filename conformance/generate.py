@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x05"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x06"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -278,6 +278,54 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
+def base_ranked_payload(points, q, neighbours, ranked):
+    """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
+    (refdec.child_order over the node centres of each depth); ranked[d]
+    says whether depth d is ranked."""
+    pts = sorted(set(points), key=lambda p: morton(p, q))
+    nodes = [(0, 0, 0)]
+    syms = []
+    for d in range(q):
+        s = q - d - 1
+        occ_by_node = {}
+        for p in pts:
+            key = (p[0] >> (s + 1), p[1] >> (s + 1), p[2] >> (s + 1))
+            c = (((p[0] >> s) & 1) << 2) | (((p[1] >> s) & 1) << 1) | ((p[2] >> s) & 1)
+            occ_by_node[key] = occ_by_node.get(key, 0) | (1 << c)
+        if ranked[d]:
+            h = 1 << (q - d)
+            centres = [(X * h + h // 2, Y * h + h // 2, Z * h + h // 2) for (X, Y, Z) in nodes]
+            nb = refdec.Neighbours(centres, q)
+            row = []
+            for node in nodes:
+                pi = refdec.child_order(node, d, q, 0, centres, nb, neighbours)
+                occ = occ_by_node[node]
+                rho = sum(1 << r for r in range(8) if occ >> pi[r] & 1)
+                row.append(refdec.E.index(rho))
+            syms.append(row)
+        else:
+            syms.append([occ_by_node[n] for n in nodes])
+        nodes = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1))
+                 for (X, Y, Z) in nodes for c in range(8) if occ_by_node[(X, Y, Z)] >> c & 1]
+    bw = BitWriter()
+    bw.put(neighbours, 4)
+    coders = []
+    for d in range(q):
+        bw.put(1 if ranked[d] else 0, 1)
+        coders.append(Coder(syms[d], 255 if ranked[d] else 256))
+        coders[-1].table(bw)
+    for c, ss in zip(coders, syms):
+        for v in ss:
+            c.put(bw, v)
+    return b"\x01" + bw.bytes()
+
+
+def base_ranked_stream(kind, q, pts, neighbours, ranked):
+    pts = sorted(set(pts))
+    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked), counts=(len(pts),), kind=kind, q=q,
+                     rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
+
+
 def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False):
     """§8A.1 conditional octree coder, written from the decoder's ranking
     (refdec.child_order). coarse: C in canonical order; added: A."""
@@ -511,6 +559,10 @@ def describe(data):
             elif t in ("BASE", "REFN"):
                 if t == "REFN" and len(p) > 1:
                     d.update(describe_refn(p))
+                if t == "BASE" and p:
+                    d["coder"] = p[0]
+                    if p[0] == 1 and len(p) > 1:
+                        d["neighbours"] = p[1] >> 4
                 layer += 1
             elif t == "RCON":
                 d.update(describe_rcon(p, counts[layer - 1]))
@@ -978,6 +1030,23 @@ def hb_rcon_compact_volume():
     return hand_stream(2, q, lv, [(1, 2, True)], rcons=[rc0, rc1])
 
 
+def hb_base_ranked_sphere():
+    return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8)
+
+
+def hb_base_ranked_mixed():
+    # neighbours 15, plain and ranked depths alternating, on a lattice (ties).
+    return base_ranked_stream(0, 6, lattice_pts(5, 4, (3, 2, 5)) + rand_pts(30, 6, 42), 15,
+                              [d % 2 == 1 for d in range(6)])
+
+
+def hb_base_ranked_small():
+    # neighbours 0 and 1 (centroid only), q = 1 and q = 3, surface kind.
+    a = base_ranked_stream(0, 1, [(0, 0, 0), (1, 1, 0), (1, 0, 1)], 1, [True])
+    b = base_ranked_stream(1, 3, rand_pts(25, 3, 43), 0, [True] * 3)
+    return a, b
+
+
 def hb_refn_tiny_coarse():
     pts = rand_pts(40, 6, 13)
     lv = nested(pts, [2, 5, 40], 14)
@@ -1117,6 +1186,14 @@ HANDBUILT = [
      "hand-built layers on a lattice: many equidistant neighbours and equal keys", sec("refn")),
     ("rcon-handbuilt-surface", hb_rcon_surface, F,
      "hand-written RCON: peel and repair off and on, filters 0, 2, 3 then all six, K = 3 and 2 (class bit streams), border, toggle and drop lists; origin and step not the encoder's", sec("rcon", "recon", "sqnt")),
+    ("base-ranked-sphere", hb_base_ranked_sphere, P,
+     "BASE coder 1 (ranked octree): neighbours = 10, every depth ranked, points on a sphere", sec("base", "refn")),
+    ("base-ranked-mixed", hb_base_ranked_mixed, P,
+     "BASE coder 1: neighbours = 15, plain and ranked depths alternating, a lattice with equidistant node centres", sec("base", "refn", "huff")),
+    ("base-ranked-q1", lambda: hb_base_ranked_small()[0], P,
+     "BASE coder 1 at q = 1: one node, k = min(neighbours, nodes) = 1", sec("base", "refn")),
+    ("base-ranked-surface-k0", lambda: hb_base_ranked_small()[1], F,
+     "BASE coder 1 with neighbours = 0 (children by number) in a surface stream", sec("base", "refn", "rcon", "recon")),
     ("rcon-compact-surface", hb_rcon_compact_surface, F,
      "hand-written compact RCON (flag bit 2): classes in groups of 3 and 8 points, toggle ranks in five contexts, border and drop lists", sec("rcon", "recon")),
     ("rcon-compact-volume", hb_rcon_compact_volume, F,
@@ -1319,8 +1396,16 @@ NEGATIVE = [
     ("neg-huffman-rcon-classes", "bad_huffman_table", P, "RCON class table (K = 2) with one symbol of length 1 only", ["7.1", "10", "13"], None),
     # layers
     ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
-    ("neg-base-coder", "bad_layer", P, "BASE coder 1", ["8", "13"],
-     lambda: stream_q1(b"\x01" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-coder", "bad_layer", P, "BASE coder 2", ["8", "13"],
+     lambda: stream_q1(b"\x02" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 1: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],
+     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(1, 1), write_table(bw, 256, single=255))))),
+    ("neg-base-ranked-zero", "bad_layer", P, "BASE coder 1: occupancy 0 at a plain depth", ["8.2", "13"],
+     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 1), write_table(bw, 256, single=0))))),
+    ("neg-base-ranked-overrun", "bad_layer", P, "BASE coder 1: the bit stream ends inside a code", ["7.3", "8.2", "13"],
+     lambda: stream_q1(base_ranked_payload(rand_pts(60, 3, 5), 3, 4, [True] * 3)[:-2], counts=(60,), q=3)),
+    ("neg-base-ranked-count", "bad_layer", P, "BASE coder 1 codes 60 points, HEAD declares 59", ["8.2", "13"],
+     lambda: stream_q1(base_ranked_payload(rand_pts(60, 3, 5), 3, 4, [True] * 3), counts=(59,), q=3)),
     ("neg-base-zero-occupancy", "bad_layer", P, "occupancy 0 (single-symbol table)", ["8.1", "13"],
      lambda: stream_q1(b"\x00" + bits_payload(lambda bw: write_table(bw, 256, single=0)))),
     ("neg-base-count-mismatch", "bad_layer", P, "BASE codes 2 points, HEAD declares 3", ["8.1", "13"],

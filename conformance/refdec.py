@@ -222,18 +222,33 @@ def morton_children(node, d, q):
 def decode_base(payload, q, n):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
-    if payload[0] != 0:
+    if payload[0] not in (0, 1):
         raise DecodeError("bad_layer", "BASE: unknown coder %d" % payload[0])
+    coder = payload[0]
     br = BitReader(payload, 1, "bad_layer", "BASE")
-    tables = [read_code(br, 256) for _ in range(q)]
+    neighbours = br.bits(4) if coder == 1 else 0
+    ranked, tables = [], []
+    for _ in range(q):
+        ranked.append(coder == 1 and br.bits(1) == 1)
+        tables.append(read_code(br, 255 if ranked[-1] else 256))
     nodes = [(0, 0, 0)]
     for d in range(q):
         nxt = []
         t = tables[d]
+        if ranked[d]:  # §8.2: neighbours among the node centres of depth d
+            h = 1 << (q - d)
+            centres = [(X * h + h // 2, Y * h + h // 2, Z * h + h // 2) for (X, Y, Z) in nodes]
+            nb = Neighbours(centres, q)
         for (X, Y, Z) in nodes:
-            occ = t.decode(br, "bad_layer")
-            if occ == 0:
-                raise DecodeError("bad_layer", "BASE: zero occupancy at depth %d" % d)
+            s = t.decode(br, "bad_layer")
+            if ranked[d]:
+                pi = child_order((X, Y, Z), d, q, 0, centres, nb, neighbours)
+                rho = E[s]
+                occ = sum(1 << pi[r] for r in range(8) if rho >> r & 1)
+            else:
+                occ = s
+                if occ == 0:
+                    raise DecodeError("bad_layer", "BASE: zero occupancy at depth %d" % d)
             for c in range(8):
                 if occ >> c & 1:
                     if len(nxt) >= n:

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-// Fuzz target: the octree base-layer coder (decode_octree) on arbitrary
-// bits.
+// Fuzz target: the base-layer coders (decode_base: plain octree, coder 0,
+// and ranked octree, coder 1) on arbitrary bits.
 //
 // Input: u8 q (mapped to 1..21), u24 point count minus one (low 18 bits:
-// at most 2^18 points, the decode target's limit), then the BASE bit stream
-// (without its coder byte). Checks: only bad_layer / bad_huffman_table are
+// at most 2^18 points, the decode target's limit), then the BASE payload
+// (coder byte first). Checks: only bad_layer / bad_huffman_table are
 // raised; a decoded set has exactly n distinct points on the 2^q grid in
 // canonical order; encoding it again and decoding gives the same set.
 #include <vector>
@@ -31,10 +31,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   std::vector<GridPoint> points;
   try {
-    points = hmc::detail::decode_octree(params.rest(), params.rest_size(), q, n);
+    points = hmc::detail::decode_base(params.rest(), params.rest_size(), q, n);
   } catch (const hmc::detail::StreamError& e) {
     const Status s = e.error().status;
-    FUZZ_CHECK(s == Status::bad_layer || s == Status::bad_huffman_table, "decode_octree raised %s: %s",
+    FUZZ_CHECK(s == Status::bad_layer || s == Status::bad_huffman_table, "decode_base raised %s: %s",
                hmc::status_name(s), e.what());
     return 0;
   }
@@ -51,16 +51,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // The encoder's stream for the set decodes to the same set. (It may be
   // longer or shorter than the input: tables written differently cost
   // different bits, so only the sets are compared.)
-  const std::vector<std::uint8_t> again = hmc::detail::encode_octree(points, q);
+  const std::vector<std::uint8_t> again = hmc::detail::encode_base(points, q);
   std::vector<GridPoint> back;
   try {
-    back = hmc::detail::decode_octree(again.data(), again.size(), q, n);
+    back = hmc::detail::decode_base(again.data(), again.size(), q, n);
   } catch (const hmc::detail::StreamError& e) {
     FUZZ_CHECK(false, "a re-encoded set does not decode: %s", e.what());
   }
   FUZZ_CHECK(back == points, "re-encoding changed the point set");
   // The canonical encoding is a fixed point (checked on small sets only, to
   // keep the largest inputs well under the 5 s timeout).
-  if (n <= 4096) FUZZ_CHECK(hmc::detail::encode_octree(back, q) == again, "encoding is not deterministic");
+  if (n <= 4096) FUZZ_CHECK(hmc::detail::encode_base(back, q) == again, "encoding is not deterministic");
   return 0;
 }

@@ -181,7 +181,7 @@ for name, data in hand.items():
     put("decode", "hand-" + name, data)
     put("container", "hand-" + name, data)
 
-# --- base_layer: q, n - 1 (u24), BASE payload without its coder byte -----
+# --- base_layer: q, n - 1 (u24), BASE payload with its coder byte --------
 def base_input(q, n, bits):
     return bytes([q - 1]) + struct.pack("<I", n - 1)[:3] + bits
 
@@ -198,14 +198,15 @@ for name, data in sorted(streams.items()):
         if not h[i] & 0x80:
             break
         i += 1
-    put("base_layer", name, base_input(q, n, parts["BASE"][1:]))
+    put("base_layer", name, base_input(q, n, parts["BASE"]))
     # The same stream declared one point short and one point long.
     if name.startswith("ball40"):
-        put("base_layer", name + "-n-1", base_input(q, n - 1, parts["BASE"][1:]))
-        put("base_layer", name + "-n+1", base_input(q, n + 1, parts["BASE"][1:]))
-put("base_layer", "single-full-q3", base_input(3, 512, single_symbol_octree(3, [255] * 3)[1:]))
-put("base_layer", "single-chain-q21", base_input(21, 1, single_symbol_octree(21, [1] * 21)[1:]))
+        put("base_layer", name + "-n-1", base_input(q, n - 1, parts["BASE"]))
+        put("base_layer", name + "-n+1", base_input(q, n + 1, parts["BASE"]))
+put("base_layer", "single-full-q3", base_input(3, 512, single_symbol_octree(3, [255] * 3)))
+put("base_layer", "single-chain-q21", base_input(21, 1, single_symbol_octree(21, [1] * 21)))
 put("base_layer", "empty-q1", base_input(1, 1, b""))
+put("base_layer", "coder1-empty-q1", base_input(1, 1, b"\x01"))
 
 # --- huffman: alphabet - 1 (u16), then a table and symbols ---------------
 def huff_input(alphabet, bits):

@@ -494,3 +494,39 @@ TEST_CASE("malformed refinement streams are rejected, never misread") {
     MESSAGE(errors << " rejected, " << decoded << " decoded to another valid set");
   }
 }
+
+TEST_CASE("base layer: the ranked octree (coder 1) codes surfaces smaller and decodes every set exactly") {
+  // A sampled surface: the plane through the neighbouring node centres
+  // predicts the children, so coder 1 is chosen and is smaller.
+  const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
+  const auto base = encode_base(sphere, 12);
+  REQUIRE(!base.empty());
+  CHECK(base[0] == 1);
+  const auto plain = encode_octree(sphere, 12);
+  CHECK(base.size() < plain.size() + 1);
+  Points sorted = sphere;
+  sort_canonical(sorted);
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  CHECK(decode_base(base.data(), base.size(), 12, sorted.size()) == sorted);
+  // Whatever coder the encoder picks, the set comes back, at any q.
+  for (int q : {1, 3, 8, 12, 21}) {
+    CAPTURE(q);
+    for (const auto& m : {samples::random_ball(500, 3), samples::lattice(6, 5, 4), samples::torus(30, 12)}) {
+      Points p = quantize(m, q);
+      sort_canonical(p);
+      p.erase(std::unique(p.begin(), p.end()), p.end());
+      const auto b = encode_base(p, q);
+      CHECK((b[0] == 0 || b[0] == 1));
+      CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
+    }
+  }
+  // A single point gains nothing from ranking: coder 0.
+  const Points one{{5, 6, 7}};
+  CHECK(encode_base(one, 4)[0] == 0);
+  // Unknown coder, empty payload, a wrong count.
+  const std::uint8_t two[] = {2, 0};
+  CHECK(status_of([&] { decode_base(two, 2, 4, 1); }) == Status::bad_layer);
+  CHECK(status_of([&] { decode_base(two, 0, 4, 1); }) == Status::bad_layer);
+  CHECK(status_of([&] { decode_base(base.data(), base.size(), 12, sorted.size() - 1); }) == Status::bad_layer);
+  CHECK(status_of([&] { decode_base(base.data(), base.size() - 1, 12, sorted.size()); }) == Status::bad_layer);
+}

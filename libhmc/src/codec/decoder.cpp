@@ -188,9 +188,7 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
       level.lod = static_cast<int>(counts.size() - 1 - k);
       s_->reserve(counts[k] * kPointBytes, "level " + std::to_string(level.lod) + " (" + std::to_string(counts[k]) + " points)");
       if (k == 0) {
-        if (c.payload[0] != static_cast<std::uint8_t>(BaseCoder::octree))
-          fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(c.payload[0]));
-        level.points = decode_octree(c.payload + 1, c.length - 1, walk.quantizer->bits, counts.front());
+        level.points = decode_base(c.payload, c.length, walk.quantizer->bits, counts.front());
       } else {
         const auto& coarse = previous_points;
         const std::uint64_t n = counts[k] - counts[k - 1];

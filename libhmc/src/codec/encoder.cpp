@@ -476,8 +476,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     const std::size_t before = w.size();
     ByteWriter layer;
     if (i + 1 == plans.size()) {
-      layer.u8(static_cast<std::uint8_t>(BaseCoder::octree));
-      layer.bytes(encode_octree(plan.points, q));
+      layer.bytes(encode_base(plan.points, q));
       w.chunk(kBaseLayer, layer.data());
       level.new_points = plan.points.size();
     } else if (!lossy_payloads.empty()) {

@@ -53,8 +53,6 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points);
 constexpr std::uint32_t kMaxClasses = 64;
 constexpr std::uint32_t kMaxScaleRank = 64;
 
-/// Base-layer coders (first byte of BASE).
-enum class BaseCoder : std::uint8_t { octree = 0 };
 /// Refinement-layer coders (first byte of REFN).
 enum class RefineCoder : std::uint8_t { conditional_octree = 0, anchored_vq = 1 };
 

@@ -2,10 +2,14 @@
 #include "pointset/octree.hpp"
 
 #include <algorithm>
+#include <array>
+#include <optional>
 #include <string>
 
 #include "entropy/huffman.hpp"
+#include "pointset/plane_rank.hpp"
 #include "util/error.hpp"
+#include "util/kdtree.hpp"
 #include "util/radix_sort.hpp"
 
 namespace hmc::detail {
@@ -73,6 +77,180 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
   return w.finish();
 }
 
+namespace {
+
+constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1;
+constexpr int kMaxNeighbours = 15;  // 4-bit field
+constexpr int kBaseNeighbours = 10;  // what the reference encoder uses
+
+// The nodes of one depth in Morton order, with the centres of their cells
+// in doubled grid coordinates and a nearest-neighbour index over them.
+class DepthNodes {
+ public:
+  DepthNodes(const std::vector<std::uint64_t>& nodes, int d, int q) : d_(d), q_(q) {
+    const std::int64_t h = std::int64_t{1} << (q - d);
+    std::vector<KdTree<std::int64_t>::Point> centres(nodes.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const GridPoint p = morton_point(nodes[i], d);
+      for (std::size_t a = 0; a < 3; ++a) centres[i][a] = 2 * std::int64_t{p[a]} * h + h;
+    }
+    centres_ = centres;
+    tree_ = KdTree<std::int64_t>(centres);
+  }
+
+  /// The ranking of the children of node i (spec 8.2): by the plane through
+  /// the k nearest node centres of the depth, the node's own included.
+  void rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order) const {
+    const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
+    std::array<KdTree<std::int64_t>::Hit, kMaxNeighbours> hits{};
+    std::array<Doubled, kMaxNeighbours> nb{};
+    const int found = tree_.nearest(centres_[i], k, hits.data());
+    for (int j = 0; j < found; ++j) {
+      const auto& c = centres_[hits[static_cast<std::size_t>(j)].index];
+      nb[static_cast<std::size_t>(j)] = {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[1]),
+                                         static_cast<std::int32_t>(c[2])};
+    }
+    rank_children(morton_point(node, d_), d_, q_, nb.data(), found, 0u, order);
+  }
+
+ private:
+  int d_, q_;
+  std::vector<KdTree<std::int64_t>::Point> centres_;
+  KdTree<std::int64_t> tree_;
+};
+
+// Bits of a code-length table plus the symbols it codes.
+std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const HuffmanCode& code) {
+  BitWriter w;
+  code.write(w);
+  return w.bit_count() + code.cost(freq);
+}
+
+std::vector<std::uint8_t> encode_ranked(const std::vector<std::uint64_t>& keys, int q, bool& any_ranked) {
+  const auto& E = occupancy_order();
+  BitWriter w;
+  w.put(kBaseNeighbours, 4);
+  std::vector<std::vector<std::uint8_t>> symbols(static_cast<std::size_t>(q));
+  std::vector<HuffmanCode> codes;
+  std::vector<bool> ranked(static_cast<std::size_t>(q), false);
+  any_ranked = false;
+  for (int d = 0; d < q; ++d) {
+    const int shift = 3 * (q - d);
+    std::vector<std::uint64_t> nodes;
+    std::vector<std::uint8_t> occ;
+    for (std::size_t i = 0; i < keys.size();) {
+      const std::uint64_t node = keys[i] >> shift;
+      std::uint8_t o = 0;
+      for (; i < keys.size() && (keys[i] >> shift) == node; ++i)
+        o = static_cast<std::uint8_t>(o | (1u << ((keys[i] >> (shift - 3)) & 7u)));
+      nodes.push_back(node);
+      occ.push_back(o);
+    }
+    std::vector<std::uint64_t> plain_freq(256, 0), ranked_freq(255, 0);
+    for (auto o : occ) ++plain_freq[o];
+    std::vector<std::uint8_t> ranked_sym(occ.size());
+    const DepthNodes depth(nodes, d, q);
+    std::array<int, 8> order{};
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      depth.rank(nodes[i], i, kBaseNeighbours, order);
+      unsigned r = 0;
+      for (std::size_t j = 0; j < 8; ++j) r |= ((occ[i] >> order[j]) & 1u) << j;
+      ranked_sym[i] = E.index[r];
+      ++ranked_freq[ranked_sym[i]];
+    }
+    const HuffmanCode plain_code = HuffmanCode::from_frequencies(plain_freq);
+    const HuffmanCode ranked_code = HuffmanCode::from_frequencies(ranked_freq);
+    const std::uint64_t plain_bits = table_and_symbols(plain_freq, plain_code);
+    const std::uint64_t ranked_bits = table_and_symbols(ranked_freq, ranked_code);
+    // Rank only where it pays for the decoder's searches: 2% of the depth.
+    const bool use = 100 * ranked_bits < 98 * plain_bits;
+    ranked[static_cast<std::size_t>(d)] = use;
+    any_ranked = any_ranked || use;
+    symbols[static_cast<std::size_t>(d)] = use ? ranked_sym : occ;
+    codes.push_back(use ? ranked_code : plain_code);
+    w.put(use ? 1 : 0, 1);
+    codes.back().write(w);
+  }
+  for (int d = 0; d < q; ++d)
+    for (std::uint8_t s : symbols[static_cast<std::size_t>(d)]) codes[static_cast<std::size_t>(d)].encode(w, s);
+  return w.finish();
+}
+
+std::vector<GridPoint> to_canonical(const std::vector<std::uint64_t>& nodes, int q) {
+  std::vector<GridPoint> points(nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) points[i] = morton_point(nodes[i], q);
+  sort_canonical(points);
+  return points;
+}
+
+std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
+  BitReader in(data, size, "BASE ranked octree");
+  const int neighbours = static_cast<int>(in.get(4));
+  std::vector<HuffmanCode> codes;
+  std::vector<bool> ranked;
+  for (int d = 0; d < q; ++d) {
+    ranked.push_back(in.get(1) == 1);
+    codes.push_back(HuffmanCode::read(in, ranked.back() ? 255 : 256,
+                                      "BASE ranked octree table for depth " + std::to_string(d)));
+  }
+  const auto& E = occupancy_order();
+  std::vector<std::uint64_t> nodes{0}, next;
+  std::array<int, 8> order{};
+  for (int d = 0; d < q; ++d) {
+    next.clear();
+    std::optional<DepthNodes> depth;
+    if (ranked[static_cast<std::size_t>(d)]) depth.emplace(nodes, d, q);
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const std::uint32_t s = codes[static_cast<std::size_t>(d)].decode(in);
+      std::uint32_t occ = s;
+      if (depth) {
+        depth->rank(nodes[i], i, neighbours, order);
+        const unsigned r = E.occupancy[s];
+        occ = 0;
+        for (std::size_t j = 0; j < 8; ++j) occ |= ((r >> j) & 1u) << order[j];
+      } else if (occ == 0) {
+        fail(Status::bad_layer, "BASE octree: empty occupancy at depth " + std::to_string(d));
+      }
+      for (std::uint32_t c = 0; c < 8; ++c)
+        if (occ & (1u << c)) {
+          if (next.size() == n)
+            fail(Status::bad_layer, "BASE octree: more than the declared " + std::to_string(n) + " points");
+          next.push_back((nodes[i] << 3) | c);
+        }
+    }
+    nodes.swap(next);
+  }
+  in.expect_end();
+  if (nodes.size() != n)
+    fail(Status::bad_layer, "BASE octree: " + std::to_string(nodes.size()) + " points, the header declares " +
+                                std::to_string(n));
+  return to_canonical(nodes, q);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q) {
+  std::vector<std::uint64_t> keys(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q);
+  radix_sort(keys, 3 * q);
+  auto plain = encode_octree(points, q);
+  bool any_ranked = false;
+  auto ranked = encode_ranked(keys, q, any_ranked);
+  std::vector<std::uint8_t> out;
+  const bool use_ranked = any_ranked && ranked.size() < plain.size();
+  out.push_back(use_ranked ? kRankedCoder : kPlainCoder);
+  const auto& body = use_ranked ? ranked : plain;
+  out.insert(out.end(), body.begin(), body.end());
+  return out;
+}
+
+std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
+  if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
+  if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n);
+  if (data[0] == kRankedCoder) return decode_ranked(data + 1, size - 1, q, n);
+  fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
+}
+
 std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
   BitReader in(data, size, "BASE octree");
   std::vector<HuffmanCode> codes;
@@ -97,10 +275,7 @@ std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size,
   if (nodes.size() != n)
     fail(Status::bad_layer, "BASE octree: " + std::to_string(nodes.size()) + " points, the header declares " +
                                 std::to_string(n));
-  std::vector<GridPoint> points(nodes.size());
-  for (std::size_t i = 0; i < nodes.size(); ++i) points[i] = morton_point(nodes[i], q);
-  sort_canonical(points);
-  return points;
+  return to_canonical(nodes, q);
 }
 
 }  // namespace hmc::detail

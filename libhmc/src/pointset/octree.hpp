@@ -20,6 +20,18 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
 /// malformed payload. The result is in canonical (x, y, z) ascending order.
 std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n);
 
+/// The whole BASE payload (spec section 8): a coder byte, then coder 0
+/// (encode_octree) or coder 1, the ranked octree (8.2), whichever is
+/// smaller. Coder 1 ranks a node's children by the plane through the
+/// centres of the nearest nodes of its depth; the encoder ranks a depth only
+/// when that saves at least 2% of the depth's bits, since every ranked node
+/// costs the decoder a nearest-neighbour search.
+std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q);
+
+/// Decode a BASE payload (coder byte first) of exactly `n` points, in
+/// canonical order; bad_layer for an unknown coder.
+std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n);
+
 /// Morton key of a point: bits interleaved x, y, z from the most significant
 /// bit down, so that the 3-bit group at depth d is the child index
 /// (x_bit << 2) | (y_bit << 1) | z_bit.
