@@ -253,11 +253,10 @@ def morton(p, q):
     return k
 
 
-def base_payload(points, q):
-    """§8.1 octree coder for a set of grid points."""
+def octree_levels(points, q):
+    """§8.1: for each depth, the nodes in Morton order and {node: occupancy}."""
     pts = sorted(set(points), key=lambda p: morton(p, q))
     nodes = [(0, 0, 0)]
-    syms = []
     for d in range(q):
         s = q - d - 1
         occ_by_node = {}
@@ -265,9 +264,14 @@ def base_payload(points, q):
             key = (p[0] >> (s + 1), p[1] >> (s + 1), p[2] >> (s + 1))
             c = (((p[0] >> s) & 1) << 2) | (((p[1] >> s) & 1) << 1) | ((p[2] >> s) & 1)
             occ_by_node[key] = occ_by_node.get(key, 0) | (1 << c)
-        syms.append([occ_by_node[n] for n in nodes])
+        yield d, nodes, occ_by_node
         nodes = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1))
                  for (X, Y, Z) in nodes for c in range(8) if occ_by_node[(X, Y, Z)] >> c & 1]
+
+
+def base_payload(points, q):
+    """§8.1 octree coder for a set of grid points."""
+    syms = [[occ[n] for n in nodes] for _, nodes, occ in octree_levels(points, q)]
     bw = BitWriter()
     coders = [Coder(s, 256) for s in syms]
     for c in coders:
@@ -282,31 +286,20 @@ def base_ranked_payload(points, q, neighbours, ranked):
     """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
     (refdec.child_order over the node centres of each depth); ranked[d]
     says whether depth d is ranked."""
-    pts = sorted(set(points), key=lambda p: morton(p, q))
-    nodes = [(0, 0, 0)]
     syms = []
-    for d in range(q):
-        s = q - d - 1
-        occ_by_node = {}
-        for p in pts:
-            key = (p[0] >> (s + 1), p[1] >> (s + 1), p[2] >> (s + 1))
-            c = (((p[0] >> s) & 1) << 2) | (((p[1] >> s) & 1) << 1) | ((p[2] >> s) & 1)
-            occ_by_node[key] = occ_by_node.get(key, 0) | (1 << c)
-        if ranked[d]:
-            h = 1 << (q - d)
-            centres = [(X * h + h // 2, Y * h + h // 2, Z * h + h // 2) for (X, Y, Z) in nodes]
-            nb = refdec.Neighbours(centres, q)
-            row = []
-            for node in nodes:
-                pi = refdec.child_order(node, d, q, 0, centres, nb, neighbours)
-                occ = occ_by_node[node]
-                rho = sum(1 << r for r in range(8) if occ >> pi[r] & 1)
-                row.append(refdec.E.index(rho))
-            syms.append(row)
-        else:
+    for d, nodes, occ_by_node in octree_levels(points, q):
+        if not ranked[d]:
             syms.append([occ_by_node[n] for n in nodes])
-        nodes = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1))
-                 for (X, Y, Z) in nodes for c in range(8) if occ_by_node[(X, Y, Z)] >> c & 1]
+            continue
+        h = 1 << (q - d)
+        centres = [(X * h + h // 2, Y * h + h // 2, Z * h + h // 2) for (X, Y, Z) in nodes]
+        nb = refdec.Neighbours(centres, q)
+        row = []
+        for node in nodes:
+            pi = refdec.child_order(node, d, q, 0, centres, nb, neighbours)
+            occ = occ_by_node[node]
+            row.append(refdec.E.index(sum(1 << r for r in range(8) if occ >> pi[r] & 1)))
+        syms.append(row)
     bw = BitWriter()
     bw.put(neighbours, 4)
     coders = []

@@ -44,36 +44,53 @@ void sort_canonical(std::vector<GridPoint>& points) {
                  static_cast<std::uint32_t>(keys[i] & 0x1fffff)};
 }
 
-std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, int q) {
-  std::vector<std::uint64_t> keys(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q);
-  radix_sort(keys, 3 * q);
+namespace {
 
-  // Occupancy symbols per depth, in breadth-first (= Morton) order.
-  std::vector<std::vector<std::uint8_t>> symbols(static_cast<std::size_t>(q));
+// The octree of a set given by its sorted Morton keys: for each depth, the
+// nodes in Morton order and their occupancies (spec 8.1).
+struct DepthOccupancy {
+  std::vector<std::uint64_t> nodes;
+  std::vector<std::uint8_t> occupancy;
+};
+
+std::vector<DepthOccupancy> occupancies(const std::vector<std::uint64_t>& keys, int q) {
+  std::vector<DepthOccupancy> out(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d) {
     const int shift = 3 * (q - d);  // node key at depth d = key >> shift
-    auto& out = symbols[static_cast<std::size_t>(d)];
-    std::size_t i = 0;
-    while (i < keys.size()) {
+    auto& level = out[static_cast<std::size_t>(d)];
+    for (std::size_t i = 0; i < keys.size();) {
       const std::uint64_t node = keys[i] >> shift;
       std::uint8_t occ = 0;
       for (; i < keys.size() && (keys[i] >> shift) == node; ++i)
         occ = static_cast<std::uint8_t>(occ | (1u << ((keys[i] >> (shift - 3)) & 7u)));
-      out.push_back(occ);
+      level.nodes.push_back(node);
+      level.occupancy.push_back(occ);
     }
   }
+  return out;
+}
 
+std::vector<std::uint64_t> sorted_keys(const std::vector<GridPoint>& points, int q) {
+  std::vector<std::uint64_t> keys(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q);
+  radix_sort(keys, 3 * q);
+  return keys;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, int q) {
+  const auto levels = occupancies(sorted_keys(points, q), q);
   BitWriter w;
   std::vector<HuffmanCode> codes;
-  for (const auto& syms : symbols) {
+  for (const auto& level : levels) {
     std::vector<std::uint64_t> freq(256, 0);
-    for (std::uint8_t s : syms) ++freq[s];
+    for (std::uint8_t s : level.occupancy) ++freq[s];
     codes.push_back(HuffmanCode::from_frequencies(freq));
     codes.back().write(w);
   }
   for (int d = 0; d < q; ++d)
-    for (std::uint8_t s : symbols[static_cast<std::size_t>(d)]) codes[static_cast<std::size_t>(d)].encode(w, s);
+    for (std::uint8_t s : levels[static_cast<std::size_t>(d)].occupancy) codes[static_cast<std::size_t>(d)].encode(w, s);
   return w.finish();
 }
 
@@ -126,7 +143,7 @@ std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const Hu
   return w.bit_count() + code.cost(freq);
 }
 
-std::vector<std::uint8_t> encode_ranked(const std::vector<std::uint64_t>& keys, int q, bool& any_ranked) {
+std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, int q, bool& any_ranked) {
   const auto& E = occupancy_order();
   BitWriter w;
   w.put(kBaseNeighbours, 4);
@@ -135,17 +152,8 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<std::uint64_t>& keys, 
   std::vector<bool> ranked(static_cast<std::size_t>(q), false);
   any_ranked = false;
   for (int d = 0; d < q; ++d) {
-    const int shift = 3 * (q - d);
-    std::vector<std::uint64_t> nodes;
-    std::vector<std::uint8_t> occ;
-    for (std::size_t i = 0; i < keys.size();) {
-      const std::uint64_t node = keys[i] >> shift;
-      std::uint8_t o = 0;
-      for (; i < keys.size() && (keys[i] >> shift) == node; ++i)
-        o = static_cast<std::uint8_t>(o | (1u << ((keys[i] >> (shift - 3)) & 7u)));
-      nodes.push_back(node);
-      occ.push_back(o);
-    }
+    const auto& nodes = levels[static_cast<std::size_t>(d)].nodes;
+    const auto& occ = levels[static_cast<std::size_t>(d)].occupancy;
     std::vector<std::uint64_t> plain_freq(256, 0), ranked_freq(255, 0);
     for (auto o : occ) ++plain_freq[o];
     std::vector<std::uint8_t> ranked_sym(occ.size());
@@ -176,23 +184,10 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<std::uint64_t>& keys, 
   return w.finish();
 }
 
-std::vector<GridPoint> to_canonical(const std::vector<std::uint64_t>& nodes, int q) {
-  std::vector<GridPoint> points(nodes.size());
-  for (std::size_t i = 0; i < nodes.size(); ++i) points[i] = morton_point(nodes[i], q);
-  sort_canonical(points);
-  return points;
-}
-
-std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
-  BitReader in(data, size, "BASE ranked octree");
-  const int neighbours = static_cast<int>(in.get(4));
-  std::vector<HuffmanCode> codes;
-  std::vector<bool> ranked;
-  for (int d = 0; d < q; ++d) {
-    ranked.push_back(in.get(1) == 1);
-    codes.push_back(HuffmanCode::read(in, ranked.back() ? 255 : 256,
-                                      "BASE ranked octree table for depth " + std::to_string(d)));
-  }
+// Both coders' symbol streams after their tables (spec 8.1, 8.2): ranked[d]
+// says whether depth d sends ranked occupancies (coder 0: none).
+std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n, const std::vector<HuffmanCode>& codes,
+                                    const std::vector<bool>& ranked, int neighbours) {
   const auto& E = occupancy_order();
   std::vector<std::uint64_t> nodes{0}, next;
   std::array<int, 8> order{};
@@ -224,18 +219,31 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
   if (nodes.size() != n)
     fail(Status::bad_layer, "BASE octree: " + std::to_string(nodes.size()) + " points, the header declares " +
                                 std::to_string(n));
-  return to_canonical(nodes, q);
+  std::vector<GridPoint> points(nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) points[i] = morton_point(nodes[i], q);
+  sort_canonical(points);
+  return points;
+}
+
+std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
+  BitReader in(data, size, "BASE ranked octree");
+  const int neighbours = static_cast<int>(in.get(4));
+  std::vector<HuffmanCode> codes;
+  std::vector<bool> ranked;
+  for (int d = 0; d < q; ++d) {
+    ranked.push_back(in.get(1) == 1);
+    codes.push_back(HuffmanCode::read(in, ranked.back() ? 255 : 256,
+                                      "BASE ranked octree table for depth " + std::to_string(d)));
+  }
+  return decode_nodes(in, q, n, codes, ranked, neighbours);
 }
 
 }  // namespace
 
 std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q) {
-  std::vector<std::uint64_t> keys(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q);
-  radix_sort(keys, 3 * q);
   auto plain = encode_octree(points, q);
   bool any_ranked = false;
-  auto ranked = encode_ranked(keys, q, any_ranked);
+  auto ranked = encode_ranked(occupancies(sorted_keys(points, q), q), q, any_ranked);
   std::vector<std::uint8_t> out;
   const bool use_ranked = any_ranked && ranked.size() < plain.size();
   out.push_back(use_ranked ? kRankedCoder : kPlainCoder);
@@ -255,27 +263,7 @@ std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size,
   BitReader in(data, size, "BASE octree");
   std::vector<HuffmanCode> codes;
   for (int d = 0; d < q; ++d) codes.push_back(HuffmanCode::read(in, 256, "BASE octree table for depth " + std::to_string(d)));
-
-  std::vector<std::uint64_t> nodes{0}, next;
-  for (int d = 0; d < q; ++d) {
-    next.clear();
-    for (std::uint64_t node : nodes) {
-      const std::uint32_t occ = codes[static_cast<std::size_t>(d)].decode(in);
-      if (occ == 0) fail(Status::bad_layer, "BASE octree: empty occupancy at depth " + std::to_string(d));
-      for (std::uint32_t c = 0; c < 8; ++c)
-        if (occ & (1u << c)) {
-          if (next.size() == n)
-            fail(Status::bad_layer, "BASE octree: more than the declared " + std::to_string(n) + " points");
-          next.push_back((node << 3) | c);
-        }
-    }
-    nodes.swap(next);
-  }
-  in.expect_end();
-  if (nodes.size() != n)
-    fail(Status::bad_layer, "BASE octree: " + std::to_string(nodes.size()) + " points, the header declares " +
-                                std::to_string(n));
-  return to_canonical(nodes, q);
+  return decode_nodes(in, q, n, codes, std::vector<bool>(static_cast<std::size_t>(q), false), 0);
 }
 
 }  // namespace hmc::detail
