@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x06"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x07"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -282,10 +282,10 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
-def base_ranked_payload(points, q, neighbours, ranked):
+def base_ranked_payload(points, q, neighbours, ranked, classes=1):
     """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
     (refdec.child_order over the node centres of each depth); ranked[d]
-    says whether depth d is ranked."""
+    says whether depth d is ranked; `classes` contexts per ranked depth."""
     syms = []
     for d, nodes, occ_by_node in octree_levels(points, q):
         if not ranked[d]:
@@ -296,26 +296,36 @@ def base_ranked_payload(points, q, neighbours, ranked):
         nb = refdec.Neighbours(centres, q)
         row = []
         for node in nodes:
-            pi = refdec.child_order(node, d, q, 0, centres, nb, neighbours)
+            pi, split = refdec.child_order(node, d, q, 0, centres, nb, neighbours, want_split=True)
             occ = occ_by_node[node]
-            row.append(refdec.E.index(sum(1 << r for r in range(8) if occ >> pi[r] & 1)))
+            ctx = min((0, 1, 2, 2, 3)[split], classes - 1)
+            row.append((ctx, refdec.E.index(sum(1 << r for r in range(8) if occ >> pi[r] & 1))))
         syms.append(row)
     bw = BitWriter()
     bw.put(neighbours, 4)
+    bw.put(classes - 1, 2)
     coders = []
     for d in range(q):
         bw.put(1 if ranked[d] else 0, 1)
-        coders.append(Coder(syms[d], 255 if ranked[d] else 256))
-        coders[-1].table(bw)
-    for c, ss in zip(coders, syms):
-        for v in ss:
-            c.put(bw, v)
+        if ranked[d]:
+            # One table per context; an unused context gets a one-symbol table.
+            coders.append([Coder([v for c, v in syms[d] if c == j] or [0], 255) for j in range(classes)])
+        else:
+            coders.append([Coder(syms[d], 256)])
+        for c in coders[-1]:
+            c.table(bw)
+    for d in range(q):
+        for v in syms[d]:
+            if ranked[d]:
+                coders[d][v[0]].put(bw, v[1])
+            else:
+                coders[d][0].put(bw, v)
     return b"\x01" + bw.bytes()
 
 
-def base_ranked_stream(kind, q, pts, neighbours, ranked):
+def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1):
     pts = sorted(set(pts))
-    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked), counts=(len(pts),), kind=kind, q=q,
+    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes), counts=(len(pts),), kind=kind, q=q,
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
 
@@ -1024,19 +1034,19 @@ def hb_rcon_compact_volume():
 
 
 def hb_base_ranked_sphere():
-    return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8)
+    return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8, classes=4)
 
 
 def hb_base_ranked_mixed():
     # neighbours 15, plain and ranked depths alternating, on a lattice (ties).
     return base_ranked_stream(0, 6, lattice_pts(5, 4, (3, 2, 5)) + rand_pts(30, 6, 42), 15,
-                              [d % 2 == 1 for d in range(6)])
+                              [d % 2 == 1 for d in range(6)], classes=3)
 
 
 def hb_base_ranked_small():
     # neighbours 0 and 1 (centroid only), q = 1 and q = 3, surface kind.
     a = base_ranked_stream(0, 1, [(0, 0, 0), (1, 1, 0), (1, 0, 1)], 1, [True])
-    b = base_ranked_stream(1, 3, rand_pts(25, 3, 43), 0, [True] * 3)
+    b = base_ranked_stream(1, 3, rand_pts(25, 3, 43), 0, [True] * 3, classes=2)
     return a, b
 
 
@@ -1180,13 +1190,13 @@ HANDBUILT = [
     ("rcon-handbuilt-surface", hb_rcon_surface, F,
      "hand-written RCON: peel and repair off and on, filters 0, 2, 3 then all six, K = 3 and 2 (class bit streams), border, toggle and drop lists; origin and step not the encoder's", sec("rcon", "recon", "sqnt")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
-     "BASE coder 1 (ranked octree): neighbours = 10, every depth ranked, points on a sphere", sec("base", "refn")),
+     "BASE coder 1 (ranked octree): neighbours = 10, four contexts, every depth ranked, points on a sphere", sec("base", "refn")),
     ("base-ranked-mixed", hb_base_ranked_mixed, P,
-     "BASE coder 1: neighbours = 15, plain and ranked depths alternating, a lattice with equidistant node centres", sec("base", "refn", "huff")),
+     "BASE coder 1: neighbours = 15, three contexts, plain and ranked depths alternating, a lattice with equidistant node centres", sec("base", "refn", "huff")),
     ("base-ranked-q1", lambda: hb_base_ranked_small()[0], P,
      "BASE coder 1 at q = 1: one node, k = min(neighbours, nodes) = 1", sec("base", "refn")),
     ("base-ranked-surface-k0", lambda: hb_base_ranked_small()[1], F,
-     "BASE coder 1 with neighbours = 0 (children by number) in a surface stream", sec("base", "refn", "rcon", "recon")),
+     "BASE coder 1 with neighbours = 0 (children by number, so every node in context 0) and two contexts, in a surface stream", sec("base", "refn", "rcon", "recon")),
     ("rcon-compact-surface", hb_rcon_compact_surface, F,
      "hand-written compact RCON (flag bit 2): classes in groups of 3 and 8 points, toggle ranks in five contexts, border and drop lists", sec("rcon", "recon")),
     ("rcon-compact-volume", hb_rcon_compact_volume, F,
@@ -1392,9 +1402,9 @@ NEGATIVE = [
     ("neg-base-coder", "bad_layer", P, "BASE coder 2", ["8", "13"],
      lambda: stream_q1(b"\x02" + base_payload([(0, 0, 0)], 1)[1:])),
     ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 1: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],
-     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(1, 1), write_table(bw, 256, single=255))))),
+     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(1, 1), write_table(bw, 256, single=255))))),
     ("neg-base-ranked-zero", "bad_layer", P, "BASE coder 1: occupancy 0 at a plain depth", ["8.2", "13"],
-     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 1), write_table(bw, 256, single=0))))),
+     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), write_table(bw, 256, single=0))))),
     ("neg-base-ranked-overrun", "bad_layer", P, "BASE coder 1: the bit stream ends inside a code", ["7.3", "8.2", "13"],
      lambda: stream_q1(base_ranked_payload(rand_pts(60, 3, 5), 3, 4, [True] * 3)[:-2], counts=(60,), q=3)),
     ("neg-base-ranked-count", "bad_layer", P, "BASE coder 1 codes 60 points, HEAD declares 59", ["8.2", "13"],

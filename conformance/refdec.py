@@ -227,10 +227,11 @@ def decode_base(payload, q, n):
     coder = payload[0]
     br = BitReader(payload, 1, "bad_layer", "BASE")
     neighbours = br.bits(4) if coder == 1 else 0
+    classes = br.bits(2) + 1 if coder == 1 else 1
     ranked, tables = [], []
     for _ in range(q):
         ranked.append(coder == 1 and br.bits(1) == 1)
-        tables.append(read_code(br, 255 if ranked[-1] else 256))
+        tables.append([read_code(br, 255) for _ in range(classes)] if ranked[-1] else [read_code(br, 256)])
     nodes = [(0, 0, 0)]
     for d in range(q):
         nxt = []
@@ -240,13 +241,14 @@ def decode_base(payload, q, n):
             centres = [(X * h + h // 2, Y * h + h // 2, Z * h + h // 2) for (X, Y, Z) in nodes]
             nb = Neighbours(centres, q)
         for (X, Y, Z) in nodes:
-            s = t.decode(br, "bad_layer")
             if ranked[d]:
-                pi = child_order((X, Y, Z), d, q, 0, centres, nb, neighbours)
+                pi, split = child_order((X, Y, Z), d, q, 0, centres, nb, neighbours, want_split=True)
+                x = (0, 1, 2, 2, 3)[split]
+                s = t[min(x, classes - 1)].decode(br, "bad_layer")
                 rho = E[s]
                 occ = sum(1 << pi[r] for r in range(8) if rho >> r & 1)
             else:
-                occ = s
+                occ = t[0].decode(br, "bad_layer")
                 if occ == 0:
                     raise DecodeError("bad_layer", "BASE: zero occupancy at depth %d" % d)
             for c in range(8):
@@ -347,8 +349,9 @@ def ring(cx, cy, cz, r):
                 yield (cx + dx, cy + dy, cz + r)
 
 
-def child_order(node, d, q, m, coarse, nb, neighbours):
-    """§8A.1 ranking: returns pi, pi[r] = child at rank r."""
+def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False):
+    """§8A.1 ranking: returns pi, pi[r] = child at rank r (and, with
+    want_split, how many children lie on the plane's smaller side, §8.2)."""
     X, Y, Z = node
     h = 1 << (q - d)
     O = (2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h)
@@ -378,15 +381,19 @@ def child_order(node, d, q, m, coarse, nb, neighbours):
             j = a
     n = reduce_bits([A[0][j], A[1][j], A[2][j]], 20)
     keys = []
+    above = below = 0
     for c in range(8):
         bx, by, bz = c >> 2, (c >> 1) & 1, c & 1
         U = ((2 * X + bx) * h + h // 2, (2 * Y + by) * h + h // 2, (2 * Z + bz) * h + h // 2)
         V = (k * U[0] - S[0], k * U[1] - S[1], k * U[2] - S[2])
-        t = abs(n[0] * V[0] + n[1] * V[1] + n[2] * V[2])
+        dot = n[0] * V[0] + n[1] * V[1] + n[2] * V[2]
+        above += dot > 0
+        below += dot < 0
         e = V[0] * V[0] + V[1] * V[1] + V[2] * V[2]
-        keys.append((1 - (m >> c & 1), t, e, c))
+        keys.append((1 - (m >> c & 1), abs(dot), e, c))
     keys.sort()
-    return [key[3] for key in keys]
+    pi = [key[3] for key in keys]
+    return (pi, min(above, below)) if want_split else pi
 
 
 def decode_refn(payload, q, coarse, n, codebook=None):

@@ -117,7 +117,9 @@ class DepthNodes {
 
   /// The ranking of the children of node i (spec 8.2): by the plane through
   /// the k nearest node centres of the depth, the node's own included.
-  void rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order) const {
+  /// Returns the node's context (spec 8.2): from how many children lie on
+  /// the smaller side of the plane, 0 | 1 | 2-3 | 4 -> 0 | 1 | 2 | 3.
+  int rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order) const {
     const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
     std::array<KdTree<std::int64_t>::Hit, kMaxNeighbours> hits{};
     std::array<Doubled, kMaxNeighbours> nb{};
@@ -127,7 +129,9 @@ class DepthNodes {
       nb[static_cast<std::size_t>(j)] = {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[1]),
                                          static_cast<std::int32_t>(c[2])};
     }
-    rank_children(morton_point(node, d_), d_, q_, nb.data(), found, 0u, order);
+    int split = 0;
+    rank_children(morton_point(node, d_), d_, q_, nb.data(), found, 0u, order, &split);
+    return split <= 1 ? split : split <= 3 ? 2 : 3;
   }
 
  private:
@@ -143,51 +147,95 @@ std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const Hu
   return w.bit_count() + code.cost(freq);
 }
 
-std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, int q, bool& any_ranked) {
-  const auto& E = occupancy_order();
+
+// Coder 1 with `classes` contexts per ranked depth, from the plain and
+// ranked symbols of every depth (ranked[d][i], context[d][i]).
+std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels, int q, int classes,
+                                       const std::vector<std::vector<std::uint8_t>>& ranked_sym,
+                                       const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked) {
   BitWriter w;
   w.put(kBaseNeighbours, 4);
-  std::vector<std::vector<std::uint8_t>> symbols(static_cast<std::size_t>(q));
-  std::vector<HuffmanCode> codes;
-  std::vector<bool> ranked(static_cast<std::size_t>(q), false);
+  w.put(static_cast<std::uint32_t>(classes - 1), 2);
   any_ranked = false;
+  std::vector<bool> ranked(static_cast<std::size_t>(q), false);
+  std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
+  for (int d = 0; d < q; ++d) {
+    const auto sd = static_cast<std::size_t>(d);
+    std::vector<std::uint64_t> plain_freq(256, 0);
+    for (auto o : levels[sd].occupancy) ++plain_freq[o];
+    std::vector<std::vector<std::uint64_t>> freq(static_cast<std::size_t>(classes), std::vector<std::uint64_t>(255, 0));
+    for (std::size_t i = 0; i < ranked_sym[sd].size(); ++i)
+      ++freq[std::min<std::size_t>(context[sd][i], static_cast<std::size_t>(classes - 1))][ranked_sym[sd][i]];
+    const HuffmanCode plain_code = HuffmanCode::from_frequencies(plain_freq);
+    const std::uint64_t plain_bits = table_and_symbols(plain_freq, plain_code);
+    std::vector<HuffmanCode> ranked_codes;
+    std::uint64_t ranked_bits = 0;
+    for (const auto& f : freq) {
+      // An unused context still needs a table: the cheapest, one symbol.
+      std::vector<std::uint64_t> g = f;
+      if (std::all_of(g.begin(), g.end(), [](std::uint64_t x) { return x == 0; })) g[0] = 1;
+      ranked_codes.push_back(HuffmanCode::from_frequencies(g));
+      ranked_bits += table_and_symbols(f, ranked_codes.back());
+    }
+    // Rank only where it pays for the decoder's searches: 2% of the depth.
+    const bool use = 100 * ranked_bits < 98 * plain_bits;
+    ranked[sd] = use;
+    any_ranked = any_ranked || use;
+    w.put(use ? 1 : 0, 1);
+    if (use) {
+      codes[sd] = std::move(ranked_codes);
+    } else {
+      codes[sd] = {plain_code};
+    }
+    for (const auto& c : codes[sd]) c.write(w);
+  }
+  for (int d = 0; d < q; ++d) {
+    const auto sd = static_cast<std::size_t>(d);
+    if (!ranked[sd]) {
+      for (std::uint8_t s : levels[sd].occupancy) codes[sd][0].encode(w, s);
+      continue;
+    }
+    for (std::size_t i = 0; i < ranked_sym[sd].size(); ++i)
+      codes[sd][std::min<std::size_t>(context[sd][i], static_cast<std::size_t>(classes - 1))].encode(w, ranked_sym[sd][i]);
+  }
+  return w.finish();
+}
+
+std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, int q, bool& any_ranked) {
+  const auto& E = occupancy_order();
+  std::vector<std::vector<std::uint8_t>> ranked_sym(static_cast<std::size_t>(q)), context(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d) {
     const auto& nodes = levels[static_cast<std::size_t>(d)].nodes;
     const auto& occ = levels[static_cast<std::size_t>(d)].occupancy;
-    std::vector<std::uint64_t> plain_freq(256, 0), ranked_freq(255, 0);
-    for (auto o : occ) ++plain_freq[o];
-    std::vector<std::uint8_t> ranked_sym(occ.size());
+    auto& sym = ranked_sym[static_cast<std::size_t>(d)];
+    auto& ctx = context[static_cast<std::size_t>(d)];
+    sym.resize(occ.size());
+    ctx.resize(occ.size());
     const DepthNodes depth(nodes, d, q);
     std::array<int, 8> order{};
     for (std::size_t i = 0; i < nodes.size(); ++i) {
-      depth.rank(nodes[i], i, kBaseNeighbours, order);
+      ctx[i] = static_cast<std::uint8_t>(depth.rank(nodes[i], i, kBaseNeighbours, order));
       unsigned r = 0;
       for (std::size_t j = 0; j < 8; ++j) r |= ((occ[i] >> order[j]) & 1u) << j;
-      ranked_sym[i] = E.index[r];
-      ++ranked_freq[ranked_sym[i]];
+      sym[i] = E.index[r];
     }
-    const HuffmanCode plain_code = HuffmanCode::from_frequencies(plain_freq);
-    const HuffmanCode ranked_code = HuffmanCode::from_frequencies(ranked_freq);
-    const std::uint64_t plain_bits = table_and_symbols(plain_freq, plain_code);
-    const std::uint64_t ranked_bits = table_and_symbols(ranked_freq, ranked_code);
-    // Rank only where it pays for the decoder's searches: 2% of the depth.
-    const bool use = 100 * ranked_bits < 98 * plain_bits;
-    ranked[static_cast<std::size_t>(d)] = use;
-    any_ranked = any_ranked || use;
-    symbols[static_cast<std::size_t>(d)] = use ? ranked_sym : occ;
-    codes.push_back(use ? ranked_code : plain_code);
-    w.put(use ? 1 : 0, 1);
-    codes.back().write(w);
   }
-  for (int d = 0; d < q; ++d)
-    for (std::uint8_t s : symbols[static_cast<std::size_t>(d)]) codes[static_cast<std::size_t>(d)].encode(w, s);
-  return w.finish();
+  // 1, 2 or 4 contexts: the smallest stream.
+  std::vector<std::uint8_t> best;
+  for (int classes : {1, 2, 4}) {
+    bool any = false;
+    auto bytes = write_ranked(levels, q, classes, ranked_sym, context, any);
+    if (best.empty() || bytes.size() < best.size()) best = std::move(bytes), any_ranked = any;
+  }
+  return best;
 }
 
 // Both coders' symbol streams after their tables (spec 8.1, 8.2): ranked[d]
 // says whether depth d sends ranked occupancies (coder 0: none).
-std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n, const std::vector<HuffmanCode>& codes,
-                                    const std::vector<bool>& ranked, int neighbours) {
+// codes[d][j]: the table of depth d for context j (one at plain depths).
+std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
+                                    const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,
+                                    int neighbours) {
   const auto& E = occupancy_order();
   std::vector<std::uint64_t> nodes{0}, next;
   std::array<int, 8> order{};
@@ -196,14 +244,15 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n, const
     std::optional<DepthNodes> depth;
     if (ranked[static_cast<std::size_t>(d)]) depth.emplace(nodes, d, q);
     for (std::size_t i = 0; i < nodes.size(); ++i) {
-      const std::uint32_t s = codes[static_cast<std::size_t>(d)].decode(in);
-      std::uint32_t occ = s;
+      const auto& table = codes[static_cast<std::size_t>(d)];
+      std::uint32_t occ = 0;
       if (depth) {
-        depth->rank(nodes[i], i, neighbours, order);
+        const int context = depth->rank(nodes[i], i, neighbours, order);
+        const std::uint32_t s = table[std::min<std::size_t>(static_cast<std::size_t>(context), table.size() - 1)].decode(in);
         const unsigned r = E.occupancy[s];
         occ = 0;
         for (std::size_t j = 0; j < 8; ++j) occ |= ((r >> j) & 1u) << order[j];
-      } else if (occ == 0) {
+      } else if ((occ = table[0].decode(in)) == 0) {
         fail(Status::bad_layer, "BASE octree: empty occupancy at depth " + std::to_string(d));
       }
       for (std::uint32_t c = 0; c < 8; ++c)
@@ -228,12 +277,18 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n, const
 std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
-  std::vector<HuffmanCode> codes;
+  const int classes = static_cast<int>(in.get(2)) + 1;
+  std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
   std::vector<bool> ranked;
   for (int d = 0; d < q; ++d) {
     ranked.push_back(in.get(1) == 1);
-    codes.push_back(HuffmanCode::read(in, ranked.back() ? 255 : 256,
-                                      "BASE ranked octree table for depth " + std::to_string(d)));
+    const std::string what = "BASE ranked octree table for depth " + std::to_string(d);
+    if (!ranked.back()) {
+      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, what));
+      continue;
+    }
+    for (int j = 0; j < classes; ++j)
+      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 255, what + " context " + std::to_string(j)));
   }
   return decode_nodes(in, q, n, codes, ranked, neighbours);
 }
@@ -261,8 +316,9 @@ std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, i
 
 std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
   BitReader in(data, size, "BASE octree");
-  std::vector<HuffmanCode> codes;
-  for (int d = 0; d < q; ++d) codes.push_back(HuffmanCode::read(in, 256, "BASE octree table for depth " + std::to_string(d)));
+  std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
+  for (int d = 0; d < q; ++d)
+    codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, "BASE octree table for depth " + std::to_string(d)));
   return decode_nodes(in, q, n, codes, std::vector<bool>(static_cast<std::size_t>(q), false), 0);
 }
 

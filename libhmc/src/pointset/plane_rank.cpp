@@ -44,7 +44,7 @@ void reduce(std::array<std::int64_t, N>& v, int bits) {
 }  // namespace
 
 void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
-                   std::array<int, 8>& order) {
+                   std::array<int, 8>& order, int* split) {
   const std::int64_t h = std::int64_t{1} << (q - d);  // node side
   std::array<std::int64_t, 3> s{0, 0, 0};
   std::array<std::int64_t, 6> ss{};  // xx yy zz xy xz yz
@@ -72,6 +72,7 @@ void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, 
   reduce(n, 20);
 
   std::array<std::int64_t, 8> t{}, e{};
+  int above = 0, below = 0;
   for (std::size_t c = 0; c < 8; ++c) {
     std::int64_t dot = 0, len = 0;
     for (std::size_t a = 0; a < 3; ++a) {
@@ -82,7 +83,10 @@ void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, 
     }
     t[c] = dot < 0 ? -dot : dot;
     e[c] = len;
+    above += dot > 0;
+    below += dot < 0;
   }
+  if (split) *split = std::min(above, below);
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](int a, int b) {
     const unsigned ca = (first_mask >> a) & 1u, cb = (first_mask >> b) & 1u;

@@ -31,7 +31,9 @@ using Doubled = std::array<std::int32_t, 3>;
 /// depth d < q on a 2^q grid): children whose bit is set in `first_mask`
 /// first, then by distance of the child's centre to the plane fitted to the
 /// k `neighbours`, then by distance to their centroid, then by child number.
+/// `split`, when given, receives how many children lie on the smaller side
+/// of that plane (0 to 4; children on the plane count on neither side).
 void rank_children(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
-                   std::array<int, 8>& order);
+                   std::array<int, 8>& order, int* split = nullptr);
 
 }  // namespace hmc::detail
