@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x07"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x08"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -308,8 +308,9 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1):
     for d in range(q):
         bw.put(1 if ranked[d] else 0, 1)
         if ranked[d]:
-            # One table per context; an unused context gets a one-symbol table.
-            coders.append([Coder([v for c, v in syms[d] if c == j] or [0], 255) for j in range(classes)])
+            # One table per context, of two symbols at least (§8.2): a context
+            # with fewer gets phantom symbols 0 and 1.
+            coders.append([Coder([v for c, v in syms[d] if c == j] + [0, 1], 255) for j in range(classes)])
         else:
             coders.append([Coder(syms[d], 256)])
         for c in coders[-1]:
@@ -1403,6 +1404,8 @@ NEGATIVE = [
      lambda: stream_q1(b"\x02" + base_payload([(0, 0, 0)], 1)[1:])),
     ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 1: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],
      lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(1, 1), write_table(bw, 256, single=255))))),
+    ("neg-base-ranked-single", "bad_layer", P, "BASE coder 1: a one-symbol code at a ranked depth (a 125-byte stream that would ask for 5.5 million nearest-neighbour searches)", ["8.2", "14", "13"],
+     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), [(bw.put(1, 1), write_table(bw, 255, single=(254 if d < 6 else 0))) for d in range(21)])), counts=(1 << 18,), q=21)),
     ("neg-base-ranked-zero", "bad_layer", P, "BASE coder 1: occupancy 0 at a plain depth", ["8.2", "13"],
      lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), write_table(bw, 256, single=0))))),
     ("neg-base-ranked-overrun", "bad_layer", P, "BASE coder 1: the bit stream ends inside a code", ["7.3", "8.2", "13"],

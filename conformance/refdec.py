@@ -232,6 +232,9 @@ def decode_base(payload, q, n):
     for _ in range(q):
         ranked.append(coder == 1 and br.bits(1) == 1)
         tables.append([read_code(br, 255) for _ in range(classes)] if ranked[-1] else [read_code(br, 256)])
+        if ranked[-1] and any(t.single is not None for t in tables[-1]):
+            # §8.2: every ranked node costs a bit
+            raise DecodeError("bad_layer", "BASE: a one-symbol code at ranked depth %d" % (len(tables) - 1))
     nodes = [(0, 0, 0)]
     for d in range(q):
         nxt = []

@@ -38,6 +38,8 @@ class HuffmanCode {
   std::uint32_t decode(BitReader& in) const;
 
   std::uint32_t alphabet() const { return static_cast<std::uint32_t>(lengths_.size()); }
+  /// True for the one-symbol form, whose symbols cost no bits.
+  bool single() const { return single_; }
   int length(std::uint32_t symbol) const { return lengths_[symbol]; }
   /// Total bits to code `freq` with this code.
   std::uint64_t cost(const std::vector<std::uint64_t>& freq) const;

@@ -171,9 +171,12 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
     std::vector<HuffmanCode> ranked_codes;
     std::uint64_t ranked_bits = 0;
     for (const auto& f : freq) {
-      // An unused context still needs a table: the cheapest, one symbol.
+      // A ranked depth's codes have two symbols at least (spec 8.2), so that
+      // every ranked node costs a bit: give unused symbols a phantom count.
       std::vector<std::uint64_t> g = f;
-      if (std::all_of(g.begin(), g.end(), [](std::uint64_t x) { return x == 0; })) g[0] = 1;
+      auto used = std::count_if(g.begin(), g.end(), [](std::uint64_t v) { return v != 0; });
+      for (std::size_t x = 0; x < g.size() && used < 2; ++x)
+        if (g[x] == 0) g[x] = 1, ++used;
       ranked_codes.push_back(HuffmanCode::from_frequencies(g));
       ranked_bits += table_and_symbols(f, ranked_codes.back());
     }
@@ -287,8 +290,13 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
       codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, what));
       continue;
     }
-    for (int j = 0; j < classes; ++j)
+    for (int j = 0; j < classes; ++j) {
       codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 255, what + " context " + std::to_string(j)));
+      // Every ranked node costs a bit: its nearest-neighbour search is paid
+      // for by the stream (spec 8.2).
+      if (codes[static_cast<std::size_t>(d)].back().single())
+        fail(Status::bad_layer, what + " context " + std::to_string(j) + ": a one-symbol code at a ranked depth");
+    }
   }
   return decode_nodes(in, q, n, codes, ranked, neighbours);
 }
