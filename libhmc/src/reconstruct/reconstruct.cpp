@@ -97,11 +97,15 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     return a.key != b.key ? a.key < b.key : a.slot < b.slot;
   });
   std::vector<std::array<std::uint32_t, 3>> faces;
-  std::vector<std::uint32_t> face_of_slot(slots.size());
+  std::vector<std::uint32_t> face_of_slot(slots.size()), slot_ids(slots.size());
   for (std::size_t i = 0; i < slots.size(); ++i) {
     if (i == 0 || slots[i].key != slots[i - 1].key) faces.push_back(slots[i].key);
     face_of_slot[i] = static_cast<std::uint32_t>(faces.size() - 1);
+    slot_ids[i] = slots[i].slot;
   }
+  // Only the slot numbers are needed from here on: free the keys (the
+  // filters' working memory is most of a decoder's peak).
+  std::vector<Slot>().swap(slots);
   const std::size_t nf = faces.size();
   std::vector<TriangleParts> tp(nf);
   std::vector<std::uint8_t> keep(nf, 1);
@@ -134,6 +138,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       for (int a = 0; a < 3; ++a)
         for (int b = a + 1; b < 3; ++b) refs.push_back({(std::uint64_t{f[a]} << 32) | f[b], i});
     }
+    std::vector<std::array<std::uint32_t, 3>>().swap(faces);  // the references hold the edges now
     std::sort(refs.begin(), refs.end(), [](const EdgeRef& x, const EdgeRef& y) {
       return x.edge != y.edge ? x.edge < y.edge : x.face < y.face;
     });
@@ -166,6 +171,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
         }
       i = j;
     }
+    std::vector<EdgeRef>().swap(refs);
     std::vector<std::uint8_t> next = keep;
     for (std::uint32_t f = 0; f < nf; ++f) {
       if (!keep[f]) continue;
@@ -194,8 +200,8 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     }
     keep.swap(next);
   }
-  for (std::size_t i = 0; i < slots.size(); ++i)
-    if (!keep[face_of_slot[i]]) cand[slots[i].slot] = 0;
+  for (std::size_t i = 0; i < slot_ids.size(); ++i)
+    if (!keep[face_of_slot[i]]) cand[slot_ids[i]] = 0;
 }
 
 // Local soundness of the interface around vertex v: 1 if v should be on it
