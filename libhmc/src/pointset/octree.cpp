@@ -48,9 +48,10 @@ void sort_canonical(std::vector<GridPoint>& points) {
 namespace {
 
 // The octree of a set given by its sorted Morton keys: for each depth, the
-// nodes in Morton order and their occupancies (spec 8.1).
+// occupancies of its nodes in Morton order (spec 8.1). The nodes themselves
+// are rebuilt one depth at a time (nodes_at) where the ranked coder needs
+// them: keeping every depth's would double the encoder's memory.
 struct DepthOccupancy {
-  std::vector<std::uint64_t> nodes;
   std::vector<std::uint8_t> occupancy;
 };
 
@@ -64,11 +65,19 @@ std::vector<DepthOccupancy> occupancies(const std::vector<std::uint64_t>& keys, 
       std::uint8_t occ = 0;
       for (; i < keys.size() && (keys[i] >> shift) == node; ++i)
         occ = static_cast<std::uint8_t>(occ | (1u << ((keys[i] >> (shift - 3)) & 7u)));
-      level.nodes.push_back(node);
       level.occupancy.push_back(occ);
     }
   }
   return out;
+}
+
+// The nodes of depth d in Morton order.
+std::vector<std::uint64_t> nodes_at(const std::vector<std::uint64_t>& keys, int d, int q) {
+  const int shift = 3 * (q - d);
+  std::vector<std::uint64_t> nodes;
+  for (std::uint64_t k : keys)
+    if (nodes.empty() || nodes.back() != (k >> shift)) nodes.push_back(k >> shift);
+  return nodes;
 }
 
 std::vector<std::uint64_t> sorted_keys(const std::vector<GridPoint>& points, int q) {
@@ -225,13 +234,13 @@ double entropy_bits(const std::vector<std::uint64_t>& freq) {
 // block are missed), so that the encoder does not rank every node of a
 // large depth to learn that ranking does not pay (a million random points:
 // 12 times the plain coder's time without it).
-bool ranking_may_pay(const DepthOccupancy& level, int d, int q) {
+bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q) {
   constexpr std::size_t kBlock = 8192;
-  const std::size_t n = level.nodes.size();
+  const std::size_t n = nodes.size();
   if (n <= 2 * kBlock) return true;
   const std::size_t b0 = n / 2 - kBlock / 2;
-  const std::vector<std::uint64_t> block(level.nodes.begin() + static_cast<std::ptrdiff_t>(b0),
-                                         level.nodes.begin() + static_cast<std::ptrdiff_t>(b0 + kBlock));
+  const std::vector<std::uint64_t> block(nodes.begin() + static_cast<std::ptrdiff_t>(b0),
+                                         nodes.begin() + static_cast<std::ptrdiff_t>(b0 + kBlock));
   const DepthNodes depth(block, d, q);
   std::vector<std::uint64_t> plain(256, 0), ranked(255, 0);
   std::array<int, 8> order{};
@@ -246,13 +255,14 @@ bool ranking_may_pay(const DepthOccupancy& level, int d, int q) {
   return entropy_bits(ranked) < 0.995 * entropy_bits(plain);
 }
 
-std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, int q, bool& any_ranked) {
+std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
+                                        int q, bool& any_ranked) {
   const auto& E = occupancy_order();
   std::vector<std::vector<std::uint8_t>> ranked_sym(static_cast<std::size_t>(q)), context(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d) {
-    const auto& nodes = levels[static_cast<std::size_t>(d)].nodes;
+    const auto nodes = nodes_at(keys, d, q);
     const auto& occ = levels[static_cast<std::size_t>(d)].occupancy;
-    if (!ranking_may_pay(levels[static_cast<std::size_t>(d)], d, q)) continue;
+    if (!ranking_may_pay(nodes, levels[static_cast<std::size_t>(d)], d, q)) continue;
     auto& sym = ranked_sym[static_cast<std::size_t>(d)];
     auto& ctx = context[static_cast<std::size_t>(d)];
     sym.resize(occ.size());
@@ -346,10 +356,11 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
 }  // namespace
 
 std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q) {
-  const auto levels = occupancies(sorted_keys(points, q), q);
+  const auto keys = sorted_keys(points, q);
+  const auto levels = occupancies(keys, q);
   auto plain = write_octree(levels, q);
   bool any_ranked = false;
-  auto ranked = encode_ranked(levels, q, any_ranked);
+  auto ranked = encode_ranked(levels, keys, q, any_ranked);
   std::vector<std::uint8_t> out;
   // Coder 1 only when it saves 1% of the layer: its searches cost decoding
   // time (on a million random points in a ball it saves 0.05% and makes
