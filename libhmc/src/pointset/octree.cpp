@@ -150,6 +150,16 @@ class DepthNodes {
     return split <= 1 ? split : split <= 3 ? 2 : 3;
   }
 
+  /// The ranked occupancy of node i (its index in E, spec 8.2) for the
+  /// occupancy `occupancy`; `context` receives the node's context.
+  std::uint8_t symbol(std::uint64_t node, std::size_t i, unsigned occupancy, int& context) const {
+    std::array<int, 8> order{};
+    context = rank(node, i, kBaseNeighbours, order);
+    unsigned r = 0;
+    for (std::size_t j = 0; j < 8; ++j) r |= ((occupancy >> order[j]) & 1u) << j;
+    return occupancy_order().index[r];
+  }
+
  private:
   int d_, q_;
   std::vector<KdTree<std::int64_t>::Point> centres_;
@@ -243,21 +253,17 @@ bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupan
                                          nodes.begin() + static_cast<std::ptrdiff_t>(b0 + kBlock));
   const DepthNodes depth(block, d, q);
   std::vector<std::uint64_t> plain(256, 0), ranked(255, 0);
-  std::array<int, 8> order{};
+  int context = 0;
   for (std::size_t i = kBlock / 4; i < 3 * kBlock / 4; ++i) {
-    depth.rank(block[i], i, kBaseNeighbours, order);
     const unsigned o = level.occupancy[b0 + i];
-    unsigned r = 0;
-    for (std::size_t j = 0; j < 8; ++j) r |= ((o >> order[j]) & 1u) << j;
     ++plain[o];
-    ++ranked[occupancy_order().index[r]];
+    ++ranked[depth.symbol(block[i], i, o, context)];
   }
   return entropy_bits(ranked) < 0.995 * entropy_bits(plain);
 }
 
 std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
                                         int q, bool& any_ranked) {
-  const auto& E = occupancy_order();
   std::vector<std::vector<std::uint8_t>> ranked_sym(static_cast<std::size_t>(q)), context(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d) {
     const auto nodes = nodes_at(keys, d, q);
@@ -268,12 +274,10 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
     sym.resize(occ.size());
     ctx.resize(occ.size());
     const DepthNodes depth(nodes, d, q);
-    std::array<int, 8> order{};
     for (std::size_t i = 0; i < nodes.size(); ++i) {
-      ctx[i] = static_cast<std::uint8_t>(depth.rank(nodes[i], i, kBaseNeighbours, order));
-      unsigned r = 0;
-      for (std::size_t j = 0; j < 8; ++j) r |= ((occ[i] >> order[j]) & 1u) << j;
-      sym[i] = E.index[r];
+      int c = 0;
+      sym[i] = depth.symbol(nodes[i], i, occ[i], c);
+      ctx[i] = static_cast<std::uint8_t>(c);
     }
   }
   // 1, 2 or 4 contexts: the smallest stream.

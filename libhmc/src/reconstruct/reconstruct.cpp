@@ -707,7 +707,8 @@ void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vect
     if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
   }
   std::vector<std::uint32_t> flip(p.toggles);
-  if (p.compact) {
+  // Contexts cost a pass over the tetrahedra: only when some rank is listed.
+  if (p.compact && std::any_of(p.toggle_ranks.begin(), p.toggle_ranks.end(), [](const auto& r) { return !r.empty(); })) {
     // All ranks refer to the labels before any toggle.
     const auto ctx = toggle_contexts(dt, inside);
     std::array<std::uint32_t, kToggleContexts> seen{};
