@@ -57,6 +57,48 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   CHECK(r.out.find("\"kind\": \"surface\"") != std::string::npos);
 }
 
+TEST_CASE("dec writes binary coordinates as float32 only when that keeps the grid") {
+  const auto dir = testgen::temp_dir("cli_coords");
+  auto coords_of = [&](const std::string& ply) {
+    const std::string text = slurp(ply);
+    return text.find("property float x") != std::string::npos    ? std::string("float")
+           : text.find("property double x") != std::string::npos ? std::string("double")
+                                                                  : std::string("?");
+  };
+  // Near the origin: float32 moves no coordinate by 1/16 of a step.
+  REQUIRE(io::write_mesh(dir + "/near.xyz", samples::random_ball(300, 5)).ok());
+  // Far from it (a georeferenced survey, say): float32 would move points by
+  // many steps, so doubles are written.
+  Mesh far = samples::random_ball(300, 5);
+  for (Vec3& p : far.points) p[0] += 4.0e6;
+  REQUIRE(io::write_mesh(dir + "/far.xyz", far).ok());
+  for (const std::string name : {"near", "far"}) {
+    auto r = hmc_run(dir, "enc " + q(dir + "/" + name + ".xyz") + " -o " + q(dir + "/" + name + ".hmc") + " --bits 12");
+    REQUIRE_MESSAGE(r.code == 0, r.err);
+    for (const std::string c : {"auto", "float", "double"}) {
+      const std::string out = dir + "/" + name + "-" + c + ".ply";
+      r = hmc_run(dir, "dec " + q(dir + "/" + name + ".hmc") + " -o " + q(out) + " --coords " + c);
+      REQUIRE_MESSAGE(r.code == 0, r.err);
+    }
+    CHECK(coords_of(dir + "/" + name + "-float.ply") == "float");
+    CHECK(coords_of(dir + "/" + name + "-double.ply") == "double");
+  }
+  CHECK(coords_of(dir + "/near-auto.ply") == "float");
+  CHECK(coords_of(dir + "/far-auto.ply") == "double");
+  // The float file of the near set re-quantizes to the same grid points as
+  // the double file: the same canonical dump after re-encoding both.
+  for (const std::string c : {"float", "double"}) {
+    auto r = hmc_run(dir, "enc " + q(dir + "/near-" + c + ".ply") + " -o " + q(dir + "/re-" + c + ".hmc") +
+                              " --bits 12 --canonical " + q(dir + "/re-" + c));
+    REQUIRE_MESSAGE(r.code == 0, r.err);
+  }
+  CHECK(slurp(dir + "/re-float/level-0.points") == slurp(dir + "/re-double/level-0.points"));
+  auto r = hmc_run(dir, "dec " + q(dir + "/near.hmc") + " -o " + q(dir + "/x.ply") + " --coords half");
+  CHECK(r.code == 1);
+  CHECK(r.err.find("--coords must be auto, float or double") != std::string::npos);
+  CHECK(!fs::exists(dir + "/x.ply"));
+}
+
 TEST_CASE("canonical points are sorted grid integers, one per line") {
   const auto dir = testgen::temp_dir("cli_canonical");
   REQUIRE(io::write_mesh(dir + "/l.xyz", samples::lattice(3, 2, 2)).ok());

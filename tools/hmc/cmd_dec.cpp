@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -21,11 +22,23 @@ Mesh level_mesh(const Decoded& d, const DecodedLevel& level) {
   return m;
 }
 
+// Binary coordinates as 32-bit floats when that moves none of them by more
+// than 1/16 of the quantization step: the file keeps the grid exactly and is
+// half the size. Far from the origin (say, georeferenced data) it would not,
+// and doubles are written.
+bool float32_keeps_grid(const Mesh& m, double step) {
+  for (const Vec3& p : m.points)
+    for (double c : p)
+      if (std::fabs(static_cast<double>(static_cast<float>(c)) - c) > step / 16) return false;
+  return true;
+}
+
 }  // namespace
 
 int cmd_dec(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--points-only"},
-         {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels", "--max-memory"});
+         {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels", "--max-memory",
+          "--coords"});
   DecodeOptions opt;
   opt.finest_level = static_cast<int>(a.get_int("--level", 0, 0, 63));
   opt.limits.max_points = static_cast<std::uint64_t>(
@@ -36,10 +49,16 @@ int cmd_dec(int argc, char** argv) {
                           << 20;
   opt.reconstruct = !a.flag("--points-only");
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
+  const std::string coords = a.get("--coords", "auto");
+  if (a.ok() && coords != "auto" && coords != "float" && coords != "double") {
+    std::fprintf(stderr, "hmc dec: --coords must be auto, float or double, not '%s'\n", coords.c_str());
+    return kUsage;
+  }
   if (!a.ok() || a.positional().size() != 1) {
     std::fprintf(stderr,
                  "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR [--ext EXT]] [--canonical DIR]\n"
-                 "                  [--points-only] [--max-points N] [--max-levels N] [--max-memory MIB] [--json]\n",
+                 "                  [--coords auto|float|double] [--points-only] [--max-points N] [--max-levels N]\n"
+                 "                  [--max-memory MIB] [--json]\n",
                  a.ok() ? "need one input stream" : a.error().c_str());
     return kUsage;
   }
@@ -58,10 +77,15 @@ int cmd_dec(int argc, char** argv) {
                  opt.finest_level, d.finest().lod);
 
   Outputs written;
-  if (!out.empty()) {
+  auto options = [&](const Mesh& m) {
     io::WriteOptions wo;
     wo.protect_path = in;
-    auto w = io::write_mesh(out, level_mesh(d, d.finest()), io::Format::automatic, wo);
+    wo.float32 = coords == "float" || (coords == "auto" && float32_keeps_grid(m, d.quantizer.step));
+    return wo;
+  };
+  if (!out.empty()) {
+    const Mesh m = level_mesh(d, d.finest());
+    auto w = io::write_mesh(out, m, io::Format::automatic, options(m));
     if (!w) return report("cannot write " + out, w.error(), Stage::output);
     written.add(out);
   }
@@ -74,7 +98,8 @@ int cmd_dec(int argc, char** argv) {
     const std::string ext = a.get("--ext", "ply");
     for (const auto& level : d.levels) {
       const std::string path = (std::filesystem::path(dir) / ("level-" + std::to_string(level.lod) + "." + ext)).string();
-      auto w = io::write_mesh(path, level_mesh(d, level));
+      const Mesh m = level_mesh(d, level);
+      auto w = io::write_mesh(path, m, io::Format::automatic, options(m));
       if (!w) return report("cannot write " + path, w.error(), Stage::output);
       written.add(path);
     }

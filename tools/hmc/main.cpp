@@ -46,6 +46,8 @@ const char* kUsage =
     "      --level K           stop at level K (0 = finest)\n"
     "      --all-levels DIR    write every decoded level to DIR/level-K.<ext> (--ext, default ply)\n"
     "      --canonical DIR     write the canonical dump (header.json, level-K.points)\n"
+    "      --coords C          binary PLY/VTK coordinates: float, double, or auto (default: float when\n"
+    "                          that moves no coordinate by more than 1/16 of the quantization step)\n"
     "      --points-only       decode points only: no reconstruction (RCON is still checked)\n"
     "      --max-points N      refuse streams with more points (default 67108864)\n"
     "      --max-memory MIB    refuse levels needing more working memory (default 2048 MiB)\n"

@@ -56,6 +56,9 @@ Result<Mesh> read_mesh(const std::string& path, Format format = Format::automati
 struct WriteOptions {
   bool binary = true;        ///< PLY, VTK: binary (little-endian PLY) or ascii
   int precision = 17;        ///< significant digits for ascii coordinates (17 or more: shortest exact text)
+  /// Binary PLY and VTK: coordinates as 32-bit floats (half the bytes, about
+  /// 7 significant digits) instead of 64-bit doubles. Other formats ignore it.
+  bool float32 = false;
   /// When set, refuse (invalid_argument) to write over this file: a command
   /// passes its input path so it can never overwrite what it reads.
   std::string protect_path;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -100,7 +101,12 @@ class BitReader {
     const std::size_t byte = static_cast<std::size_t>(pos_ >> 3);
     std::uint64_t w = 0;
     if (byte + 8 <= nbytes_) {
+#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+      std::memcpy(&w, p_ + byte, 8);  // one load: the loop below is not fused by the compiler
+      w = __builtin_bswap64(w);
+#else
       for (int i = 0; i < 8; ++i) w = (w << 8) | p_[byte + static_cast<std::size_t>(i)];
+#endif
     } else {
       for (std::size_t i = 0; i < 8; ++i) w = (w << 8) | (byte + i < nbytes_ ? p_[byte + i] : 0u);
     }

@@ -156,10 +156,34 @@ void append_real(std::string& out, double v, int precision) {
   out.append(buf, static_cast<std::size_t>(r.ptr - buf));
 }
 
-void append_f64(std::string& out, double v, bool big_endian) {
-  std::uint64_t bits;
-  std::memcpy(&bits, &v, sizeof bits);
-  append_bytes(out, bits, big_endian);
+namespace {
+
+template <class U>
+char* put_bytes(char* dst, U v, bool big_endian) {
+  for (std::size_t i = 0; i < sizeof(U); ++i)
+    dst[big_endian ? sizeof(U) - 1 - i : i] = static_cast<char>(static_cast<unsigned char>(v >> (8 * i)));
+  return dst + sizeof(U);
+}
+
+}  // namespace
+
+void append_points(std::string& out, const std::vector<Vec3>& points, bool float32, bool big_endian) {
+  const std::size_t start = out.size();
+  out.resize(start + points.size() * 3 * (float32 ? 4 : 8));
+  char* dst = out.data() + start;
+  for (const Vec3& p : points)
+    for (double c : p) {
+      if (float32) {
+        const auto f = static_cast<float>(c);
+        std::uint32_t bits;
+        std::memcpy(&bits, &f, sizeof bits);
+        dst = put_bytes(dst, bits, big_endian);
+      } else {
+        std::uint64_t bits;
+        std::memcpy(&bits, &c, sizeof bits);
+        dst = put_bytes(dst, bits, big_endian);
+      }
+    }
 }
 
 void add_fan(Mesh& mesh, const std::uint32_t* corners, std::size_t n) {

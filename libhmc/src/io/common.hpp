@@ -114,7 +114,9 @@ void append_bytes(std::string& out, U v, bool big_endian) {
   }
   out.append(b, sizeof(U));
 }
-void append_f64(std::string& out, double v, bool big_endian);
+/// Append the coordinates of every point, x y z, as binary64 or (float32)
+/// rounded to binary32, in one resize of `out`.
+void append_points(std::string& out, const std::vector<Vec3>& points, bool float32, bool big_endian);
 
 // ---------------------------------------------------------- mesh build ----
 

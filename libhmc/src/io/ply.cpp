@@ -276,12 +276,13 @@ Mesh read_binary(Input& in, const Header& h, bool big) {
   return mesh;
 }
 
-void add_header(std::string& out, const Mesh& m, bool binary) {
+void add_header(std::string& out, const Mesh& m, bool binary, bool float32) {
   out += "ply\nformat ";
   out += binary ? "binary_little_endian" : "ascii";
   out += " 1.0\ncomment written by hmc\nelement vertex ";
   append_uint(out, m.points.size());
-  out += "\nproperty double x\nproperty double y\nproperty double z\n";
+  out += binary && float32 ? "\nproperty float x\nproperty float y\nproperty float z\n"
+                            : "\nproperty double x\nproperty double y\nproperty double z\n";
   if (!m.triangles.empty()) {
     out += "element face ";
     append_uint(out, m.triangles.size());
@@ -303,11 +304,10 @@ std::string write_ply(const Mesh& m, const WriteOptions& opt) {
   if (m.points.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
     hmc::detail::fail(Status::invalid_argument, "too many points for PLY int indices");
   std::string out;
-  add_header(out, m, opt.binary);
+  add_header(out, m, opt.binary, opt.float32);
   if (opt.binary) {
-    out.reserve(out.size() + m.points.size() * 24 + m.triangles.size() * 13);
-    for (const Vec3& p : m.points)
-      for (double c : p) append_f64(out, c, false);
+    out.reserve(out.size() + m.points.size() * (opt.float32 ? 12 : 24) + m.triangles.size() * 13);
+    append_points(out, m.points, opt.float32, false);
     for (const Triangle& t : m.triangles) {
       out += '\3';
       for (std::uint32_t v : t) append_bytes(out, v, false);

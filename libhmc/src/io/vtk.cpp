@@ -350,19 +350,20 @@ std::string write_vtk(const Mesh& m, const WriteOptions& opt) {
   out += bin ? "BINARY\n" : "ASCII\n";
   out += "DATASET UNSTRUCTURED_GRID\nPOINTS ";
   append_uint(out, m.points.size());
-  out += " double\n";
-  if (bin) out.reserve(out.size() + 24 * m.points.size() + 4 * size + 4 * ncells + 64);
-  for (const Vec3& p : m.points) {
-    if (bin) {
-      for (double c : p) append_f64(out, c, true);
-      continue;
+  const bool f32 = bin && opt.float32;
+  out += f32 ? " float\n" : " double\n";
+  if (bin) out.reserve(out.size() + (f32 ? 12 : 24) * m.points.size() + 4 * size + 4 * ncells + 64);
+  if (bin) {
+    append_points(out, m.points, f32, true);
+  } else {
+    for (const Vec3& p : m.points) {
+      append_real(out, p[0], opt.precision);
+      out += ' ';
+      append_real(out, p[1], opt.precision);
+      out += ' ';
+      append_real(out, p[2], opt.precision);
+      out += '\n';
     }
-    append_real(out, p[0], opt.precision);
-    out += ' ';
-    append_real(out, p[1], opt.precision);
-    out += ' ';
-    append_real(out, p[2], opt.precision);
-    out += '\n';
   }
   if (bin) out += '\n';
   if (ncells == 0) return out;

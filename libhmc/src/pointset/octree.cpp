@@ -22,27 +22,85 @@ std::uint64_t morton_key(const GridPoint& p, int q) {
   return key;
 }
 
-GridPoint morton_point(std::uint64_t key, int q) {
-  GridPoint p{0, 0, 0};
-  for (int b = 0; b < q; ++b) {
-    const auto c = static_cast<std::uint32_t>(key >> (3 * b));
-    p[0] |= ((c >> 2) & 1u) << b;
-    p[1] |= ((c >> 1) & 1u) << b;
-    p[2] |= (c & 1u) << b;
+namespace {
+
+// Three tree levels at a time: entry k of the table spreads the 9-bit Morton
+// chunk k into its x, y and z bits (3 each), packed as x << 6 | y << 3 | z.
+struct MortonChunks {
+  std::array<std::uint16_t, 512> xyz{};
+  MortonChunks() {
+    for (std::uint32_t k = 0; k < 512; ++k) {
+      std::uint32_t x = 0, y = 0, z = 0;
+      for (std::uint32_t b = 0; b < 3; ++b) {
+        const std::uint32_t c = k >> (3 * b);
+        x |= ((c >> 2) & 1u) << b;
+        y |= ((c >> 1) & 1u) << b;
+        z |= (c & 1u) << b;
+      }
+      xyz[k] = static_cast<std::uint16_t>(x << 6 | y << 3 | z);
+    }
   }
+};
+
+}  // namespace
+
+GridPoint morton_point(std::uint64_t key, int q) {
+  static const MortonChunks table;
+  GridPoint p{0, 0, 0};
+  for (int b = 0; b < q; b += 3) {
+    const std::uint32_t e = table.xyz[(key >> (3 * b)) & 511u];
+    p[0] |= (e >> 6) << b;
+    p[1] |= ((e >> 3) & 7u) << b;
+    p[2] |= (e & 7u) << b;
+  }
+  // Bits at or above q are zero in a key of depth q, so whole chunks are safe.
   return p;
 }
 
+namespace {
+
+// The width in bits of the widest coordinate (at most 21).
+int coordinate_width(std::uint32_t any) {
+  int w = 0;
+  while (w < 21 && (any >> w) != 0) ++w;
+  return w;
+}
+
+// Sort keys that pack (x, y, z) in fields of w bits each, and unpack them.
+std::vector<GridPoint> unpack_sorted(std::vector<std::uint64_t>& keys, int w, std::vector<std::uint64_t>& scratch) {
+  radix_sort(keys, 3 * w, scratch);
+  const std::uint64_t mask = (std::uint64_t{1} << w) - 1;
+  std::vector<GridPoint> points(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    points[i] = {static_cast<std::uint32_t>(keys[i] >> (2 * w)), static_cast<std::uint32_t>((keys[i] >> w) & mask),
+                 static_cast<std::uint32_t>(keys[i] & mask)};
+  return points;
+}
+
+// Points of depth q given by Morton keys, in canonical order. The keys are
+// overwritten; scratch is working memory.
+std::vector<GridPoint> canonical_from_morton(std::vector<std::uint64_t>& keys, int q,
+                                             std::vector<std::uint64_t>& scratch) {
+  for (auto& k : keys) {
+    const GridPoint p = morton_point(k, q);
+    k = (std::uint64_t{p[0]} << (2 * q)) | (std::uint64_t{p[1]} << q) | p[2];
+  }
+  return unpack_sorted(keys, q, scratch);
+}
+
+}  // namespace
+
 void sort_canonical(std::vector<GridPoint>& points) {
-  // Coordinates are below 2^21, so (x, y, z) packs into one key that sorts
-  // in canonical order.
-  std::vector<std::uint64_t> keys(points.size());
+  // Pack (x, y, z) into one key that sorts in canonical order, each field
+  // as wide as the widest coordinate, so that the radix sort makes as few
+  // passes as the coordinates need.
+  std::uint32_t any = 0;
+  for (const GridPoint& p : points) any |= p[0] | p[1] | p[2];
+  const int w = coordinate_width(any);
+  std::vector<std::uint64_t> keys(points.size()), scratch;
   for (std::size_t i = 0; i < points.size(); ++i)
-    keys[i] = (std::uint64_t{points[i][0]} << 42) | (std::uint64_t{points[i][1]} << 21) | points[i][2];
-  radix_sort(keys, 63);
-  for (std::size_t i = 0; i < points.size(); ++i)
-    points[i] = {static_cast<std::uint32_t>(keys[i] >> 42), static_cast<std::uint32_t>((keys[i] >> 21) & 0x1fffff),
-                 static_cast<std::uint32_t>(keys[i] & 0x1fffff)};
+    keys[i] = (std::uint64_t{points[i][0]} << (2 * w)) | (std::uint64_t{points[i][1]} << w) | points[i][2];
+  points = unpack_sorted(keys, w, scratch);
 }
 
 namespace {
@@ -293,6 +351,14 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
 // Both coders' symbol streams after their tables (spec 8.1, 8.2): ranked[d]
 // says whether depth d sends ranked occupancies (coder 0: none).
 // codes[d][j]: the table of depth d for context j (one at plain depths).
+// The number of children an occupancy byte names (a table: without a
+// popcount instruction in the target, the builtin is a library call).
+constexpr std::array<std::uint8_t, 256> kChildCount = [] {
+  std::array<std::uint8_t, 256> t{};
+  for (std::size_t i = 1; i < 256; ++i) t[i] = static_cast<std::uint8_t>(t[i / 2] + (i & 1));
+  return t;
+}();
+
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,
                                     int neighbours) {
@@ -301,10 +367,11 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
   std::array<int, 8> order{};
   for (int d = 0; d < q; ++d) {
     next.clear();
+    next.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(n, 8 * std::uint64_t{nodes.size()})));
+    const auto& table = codes[static_cast<std::size_t>(d)];
     std::optional<DepthNodes> depth;
     if (ranked[static_cast<std::size_t>(d)]) depth.emplace(nodes, d, q);
     for (std::size_t i = 0; i < nodes.size(); ++i) {
-      const auto& table = codes[static_cast<std::size_t>(d)];
       std::uint32_t occ = 0;
       if (depth) {
         const int context = depth->rank(nodes[i], i, neighbours, order);
@@ -314,12 +381,10 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
       } else if ((occ = table[0].decode(in)) == 0) {
         fail(Status::bad_layer, "BASE octree: empty occupancy at depth " + std::to_string(d));
       }
-      for (std::uint32_t c = 0; c < 8; ++c)
-        if (occ & (1u << c)) {
-          if (next.size() == n)
-            fail(Status::bad_layer, "BASE octree: more than the declared " + std::to_string(n) + " points");
-          next.push_back((nodes[i] << 3) | c);
-        }
+      if (next.size() + kChildCount[occ & 255u] > n)
+        fail(Status::bad_layer, "BASE octree: more than the declared " + std::to_string(n) + " points");
+      const std::uint64_t first = nodes[i] << 3;
+      for (; occ != 0; occ &= occ - 1) next.push_back(first | static_cast<std::uint32_t>(__builtin_ctz(occ)));
     }
     nodes.swap(next);
   }
@@ -327,10 +392,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
   if (nodes.size() != n)
     fail(Status::bad_layer, "BASE octree: " + std::to_string(nodes.size()) + " points, the header declares " +
                                 std::to_string(n));
-  std::vector<GridPoint> points(nodes.size());
-  for (std::size_t i = 0; i < nodes.size(); ++i) points[i] = morton_point(nodes[i], q);
-  sort_canonical(points);
-  return points;
+  return canonical_from_morton(nodes, q, next);  // next: spare capacity for the sort
 }
 
 std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
