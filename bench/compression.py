@@ -575,7 +575,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
             say(f"| {lab} | {bpp:.2f} | {e['cpu']:.3f} ({e['wall']:.3f}) | {e['rss']:.0f} | {d['cpu']:.3f} "
                 f"({d['wall']:.3f}) | {d['rss']:.0f} | {e['runs']}/{d['runs']} |")
         say("")
-        say("Encode times include reading the OBJ; decode times include writing the PLY.")
+        say("Encode times include reading the OBJ; decode times include writing the PLY, with 32-bit float coordinates from "
+            "both decoders (`hmc dec` picks float32 because it keeps every point on its grid cell).")
         say("")
 
     # 6. Checks.
