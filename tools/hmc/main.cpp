@@ -7,6 +7,10 @@
 #include <filesystem>
 #include <string>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "cli.hpp"
 #include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
@@ -71,6 +75,15 @@ int main(int argc, char** argv) {
   // A full disk or a file-size limit must surface as a failed write (exit 4,
   // nothing left behind), not as a SIGXFSZ kill halfway through a file.
   std::signal(SIGXFSZ, SIG_IGN);
+#if defined(__GLIBC__)
+  // Levels are built one after another from large buffers of varying sizes.
+  // glibc raises its mmap threshold each time such a buffer is freed, after
+  // which the next ones come from the heap and the freed space is not given
+  // back: peak memory then grows with the number of levels (a 4-level volume
+  // decode of 29,000 points peaked at 58.9 MB instead of 46.8 MB). A fixed
+  // threshold keeps every large buffer mapped and returned when freed.
+  mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+#endif
   if (argc < 2) {
     std::fputs(kUsage, stderr);
     return hmc::cli::kUsage;
