@@ -392,6 +392,16 @@ TEST_CASE("a tetrahedra budget stops quadratic tetrahedralizations early") {
   } catch (const StreamError& e) {
     CHECK(e.error().status == Status::limit_exceeded);
   }
+  // The same budget holds when the tetrahedra are refined from a subset's.
+  std::vector<GridPoint> half;
+  for (std::size_t i = 0; i < p.size(); i += 2) half.push_back(p[i]);
+  CHECK(delaunay_refine(p, half, delaunay(half), 50000).tets == full.tets);
+  try {
+    (void)delaunay_refine(p, half, delaunay(half), 20000);
+    FAIL("no limit_exceeded");
+  } catch (const StreamError& e) {
+    CHECK(e.error().status == Status::limit_exceeded);
+  }
   // Ordinary sets are not affected by a budget a few times their size.
   const auto ball = quantize(samples::random_ball(3000, 8), 10);
   const auto t = delaunay(ball);
@@ -421,4 +431,65 @@ TEST_CASE("large coordinates: the native backend, and no TetGen hazards") {
     p.push_back({700000, 700000, C - 1400000 + 1});
     run(canonical(p));
   }
+}
+
+// Levels of detail are decoded by refining the coarser level's
+// tetrahedralization (delaunay_refine): the result must be delaunay() of
+// the finer set exactly, ties included, whatever the subset.
+TEST_CASE("delaunay_refine equals delaunay of the whole set") {
+  std::mt19937_64 rng(11);
+  auto subset = [&](const std::vector<GridPoint>& p, double keep) {
+    std::bernoulli_distribution b(keep);
+    std::vector<GridPoint> s;
+    for (const auto& x : p)
+      if (b(rng)) s.push_back(x);
+    return s;
+  };
+  auto random_points = [&](std::size_t n, std::uint32_t extent) {
+    std::uniform_int_distribution<std::uint32_t> u(0, extent - 1);
+    std::vector<GridPoint> p;
+    for (std::size_t i = 0; i < n; ++i) p.push_back({u(rng), u(rng), u(rng)});
+    return canonical(p);
+  };
+  struct Case {
+    const char* name;
+    std::vector<GridPoint> points;
+  };
+  const Case cases[] = {
+      {"random", random_points(3000, 4096)},
+      {"random, small grid (many ties)", random_points(800, 12)},
+      {"lattice (every cell cospherical)", lattice(9, 8, 7)},
+      {"integer sphere", sphere_points(9)},
+  };
+  for (const Case& c : cases) {
+    for (double keep : {0.9, 0.5, 0.1}) {
+      INFO(c.name << ", keeping " << keep);
+      const auto sub = subset(c.points, keep);
+      Tetrahedralization coarse = delaunay(sub);
+      REQUIRE(!coarse.tets.empty());
+      const Tetrahedralization whole = delaunay(c.points);
+      const Tetrahedralization refined = delaunay_refine(c.points, sub, std::move(coarse));
+      CHECK(refined.tets == whole.tets);
+      CHECK(refined.neighbors == whole.neighbors);
+    }
+  }
+  // Points added outside the subset's hull, and a subset that is the whole set.
+  const auto ball = random_points(2000, 1000);
+  std::vector<GridPoint> inner;
+  for (const auto& p : ball)
+    if (p[0] > 300 && p[0] < 700 && p[1] > 300 && p[1] < 700 && p[2] > 300 && p[2] < 700) inner.push_back(p);
+  CHECK(delaunay_refine(ball, inner, delaunay(inner)).tets == delaunay(ball).tets);
+  CHECK(delaunay_refine(ball, ball, delaunay(ball)).tets == delaunay(ball).tets);
+  // A flat subset has no tetrahedra: the whole set is built from scratch.
+  const auto cube = lattice(4, 4, 4);
+  std::vector<GridPoint> flat;
+  for (const auto& p : cube)
+    if (p[2] == 0) flat.push_back(p);
+  Tetrahedralization none = delaunay(flat);
+  CHECK(none.tets.empty());
+  CHECK(delaunay_refine(cube, flat, std::move(none)).tets == delaunay(cube).tets);
+  // Points that are not a subset are a caller's bug.
+  std::vector<GridPoint> stranger = inner;
+  stranger.push_back({1001, 1001, 1001});
+  CHECK_THROWS_AS(delaunay_refine(ball, stranger, delaunay(stranger)), StreamError);
 }

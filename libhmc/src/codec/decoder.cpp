@@ -144,6 +144,11 @@ struct ChunkDecoder::State {
   std::optional<DecodedLevel> pending;  // a level whose points are decoded, waiting for its RCON
   std::vector<GridPoint> previous_points;  // the last decoded level's points
   std::uint64_t memory = 0;                // bytes counted against limits.max_memory by the kept levels
+  // The last reconstructed level's tetrahedralization, kept while a finer
+  // level may follow: that level's is built from it (delaunay_refine),
+  // inserting only the added points. Counted in `memory` while kept.
+  std::optional<Tetrahedralization> previous_dt;
+  std::uint64_t previous_dt_bytes = 0;
 
   // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
   void reserve(std::uint64_t bytes, const std::string& what) const {
@@ -222,13 +227,27 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
         const std::uint64_t n = pending->points.size();
         const std::string what = "the reconstruction of level " + std::to_string(pending->lod) + " (" +
                                  std::to_string(n) + " points)";
+        std::optional<Tetrahedralization> coarse = std::move(s_->previous_dt);
+        s_->previous_dt.reset();
+        s_->memory -= s_->previous_dt_bytes;
+        s_->previous_dt_bytes = 0;
         s_->reserve(n * kPointBytes, what);
         const std::uint64_t room = options.limits.max_memory - s_->memory - n * kPointBytes;
-        const auto dt = delaunay(pending->points, room / kTetBytes);
+        // The previous level is the coarser one, and its points a subset.
+        Tetrahedralization dt = coarse && !out.levels.empty() && out.levels.back().lod == pending->lod + 1
+                                    ? delaunay_refine(pending->points, out.levels.back().points, std::move(*coarse), room / kTetBytes)
+                                    : delaunay(pending->points, room / kTetBytes);
+        coarse.reset();
         auto rec = reconstruct(pending->points, dt, walk.header->kind, params);
         pending->triangles = std::move(rec.triangles);
         pending->tetrahedra = std::move(rec.tetrahedra);
         s_->memory += (pending->triangles.size() + pending->tetrahedra.size()) * kSimplexBytes;
+        const std::uint64_t keep = dt.tets.size() * 2 * sizeof(dt.tets[0]);
+        if (pending->lod > std::max(options.finest_level, 0) && keep <= options.limits.max_memory - s_->memory) {
+          s_->previous_dt = std::move(dt);
+          s_->previous_dt_bytes = keep;
+          s_->memory += keep;
+        }
       }
       pending->stream_bytes = c.offset + kChunkOverhead + c.length;
       out.levels.push_back(std::move(*pending));

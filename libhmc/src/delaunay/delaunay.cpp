@@ -247,7 +247,9 @@ std::uint64_t max_delaunay_tets(std::uint64_t n) {
   return n * (n - 3) / 2;
 }
 
-Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets) {
+namespace {
+
+void check_input(const std::vector<GridPoint>& points) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& p = points[i];
     if (p[0] >= kCoordLimit || p[1] >= kCoordLimit || p[2] >= kCoordLimit)
@@ -256,6 +258,44 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t 
       fail(Status::internal_error, "delaunay: points not distinct and in canonical order at " + std::to_string(i));
   }
   if (points.size() > (std::size_t{1} << 28)) fail(Status::internal_error, "delaunay: too many points");
+}
+
+// The cell cap of the native backend for at most max_tets tetrahedra.
+std::uint64_t native_cap(std::size_t n, std::uint64_t max_tets) {
+  const std::uint64_t hull = 2 * static_cast<std::uint64_t>(n) + 8;  // hull faces: at most 2n - 4
+  return max_tets > ~std::uint64_t{0} - hull ? ~std::uint64_t{0} : max_tets + hull;
+}
+
+}  // namespace
+
+Tetrahedralization delaunay_refine(const std::vector<GridPoint>& points, const std::vector<GridPoint>& sub_points,
+                                   Tetrahedralization&& sub, std::uint64_t max_tets) {
+  if (sub.tets.empty()) {
+    sub = {};
+    return delaunay(points, max_tets);
+  }
+  check_input(points);
+  // Position of each subset point in `points` (both ascending).
+  std::vector<std::uint32_t> index(sub_points.size());
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < sub_points.size(); ++i) {
+    while (j < points.size() && less_canonical(points[j], sub_points[i])) ++j;
+    if (j == points.size() || points[j] != sub_points[i])
+      fail(Status::internal_error, "delaunay: the coarser points are not a subset at " + std::to_string(i));
+    index[i] = static_cast<std::uint32_t>(j++);
+  }
+  TetList tets, nb;
+  backend::native_refine(points, index, sub.tets, sub.neighbors, tets, nb, native_cap(points.size(), max_tets));
+  const std::string error = verify_backend_output(points, tets, nb);
+  if (!error.empty()) fail(Status::internal_error, "delaunay: refining a tetrahedralization failed: " + error);
+  Tetrahedralization out;
+  out.tets = std::move(tets);
+  out.neighbors = std::move(nb);
+  return out;
+}
+
+Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets) {
+  check_input(points);
   Tetrahedralization out;
   if (!spans_3d(points)) return out;
 
@@ -273,8 +313,7 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t 
   }
   tets.clear();
   nb.clear();
-  const std::uint64_t hull = 2 * static_cast<std::uint64_t>(points.size()) + 8;  // hull faces: at most 2n - 4
-  backend::native(points, tets, nb, max_tets > ~std::uint64_t{0} - hull ? ~std::uint64_t{0} : max_tets + hull);
+  backend::native(points, tets, nb, native_cap(points.size(), max_tets));
   const std::string native_error = verify_backend_output(points, tets, nb);
   if (!native_error.empty())
     fail(Status::internal_error, "delaunay: no backend produced a verified tetrahedralization (TetGen: " + error +

@@ -79,6 +79,19 @@ struct Tetrahedralization {
 /// would need more than max_tets tetrahedra (plus the hull faces).
 Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets = ~std::uint64_t{0});
 
+/// The same tetrahedralization as delaunay(points, max_tets), built from
+/// that of a subset: `sub` must be delaunay(sub_points) for distinct grid
+/// points sub_points, all of them in `points` (both in canonical order).
+/// The perturbation depends only on the points' canonical order, which a
+/// subset keeps, so inserting the other points into `sub` gives the same
+/// result; levels of detail are decoded this way, each from the coarser
+/// one, inserting only the points a refinement layer adds. `sub` is
+/// consumed (its memory released once copied). Without tetrahedra in `sub`
+/// (a flat subset) this is delaunay(points, max_tets). Errors as
+/// delaunay(), and internal_error when sub_points is not a subset.
+Tetrahedralization delaunay_refine(const std::vector<GridPoint>& points, const std::vector<GridPoint>& sub_points,
+                                   Tetrahedralization&& sub, std::uint64_t max_tets = ~std::uint64_t{0});
+
 /// n(n-3)/2, the most tetrahedra a Delaunay tetrahedralization of n >= 4
 /// points can have (the upper bound theorem applied to the lifted points;
 /// saturating).
@@ -116,6 +129,15 @@ bool tetgen(const std::vector<GridPoint>& points, std::vector<std::array<std::ui
 /// cells (tetrahedra plus convex-hull faces) would be alive at once.
 void native(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
             std::vector<std::array<std::uint32_t, 4>>& neighbors, std::uint64_t max_cells = ~std::uint64_t{0});
+
+/// The same construction started from the tetrahedralization of a subset
+/// (`sub_tets`, `sub_neighbors`, in the subset's numbering; `index` maps it
+/// to `points`), inserting only the other points. Releases the subset's
+/// lists once copied; fails with limit_exceeded as native() does.
+void native_refine(const std::vector<GridPoint>& points, const std::vector<std::uint32_t>& index,
+                   std::vector<std::array<std::uint32_t, 4>>& sub_tets, std::vector<std::array<std::uint32_t, 4>>& sub_neighbors,
+                   std::vector<std::array<std::uint32_t, 4>>& tets, std::vector<std::array<std::uint32_t, 4>>& neighbors,
+                   std::uint64_t max_cells = ~std::uint64_t{0});
 }  // namespace backend
 
 }  // namespace hmc::detail

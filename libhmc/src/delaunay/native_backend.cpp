@@ -47,9 +47,32 @@ class Builder {
       : p_(pts), inf_(static_cast<std::uint32_t>(pts.size())), max_cells_(max_cells) {}
 
   void run(std::vector<std::array<std::uint32_t, 4>>& tets, std::vector<std::array<std::uint32_t, 4>>& nb) {
-    auto order = insertion_order();
+    std::vector<std::uint32_t> all(p_.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i);
+    auto order = insertion_order(std::move(all));
     start(order);
     for (std::uint32_t i : order) insert(i);
+    output(tets, nb);
+  }
+
+  // Starts from the tetrahedralization of a subset (its tetrahedra and
+  // adjacency, vertices renumbered by `index` into p_) and inserts the other
+  // points. The perturbation depends only on the canonical order, which the
+  // subset keeps, so the result is the same as building from scratch.
+  // The subset's lists are released once copied in.
+  void refine(const std::vector<std::uint32_t>& index, std::vector<std::array<std::uint32_t, 4>>& sub_tets,
+              std::vector<std::array<std::uint32_t, 4>>& sub_nb, std::vector<std::array<std::uint32_t, 4>>& tets,
+              std::vector<std::array<std::uint32_t, 4>>& nb) {
+    seed(index, sub_tets, sub_nb);
+    std::vector<std::array<std::uint32_t, 4>>().swap(sub_tets);
+    std::vector<std::array<std::uint32_t, 4>>().swap(sub_nb);
+    std::vector<char> seeded(p_.size(), 0);
+    for (std::uint32_t i : index) seeded[i] = 1;
+    std::vector<std::uint32_t> rest;
+    rest.reserve(p_.size() - index.size());
+    for (std::size_t i = 0; i < p_.size(); ++i)
+      if (!seeded[i]) rest.push_back(static_cast<std::uint32_t>(i));
+    for (std::uint32_t i : insertion_order(std::move(rest))) insert(i);
     output(tets, nb);
   }
 
@@ -81,9 +104,7 @@ class Builder {
 
   // BRIO order: a fixed-seed shuffle, then rounds of geometrically growing
   // size, each sorted along a Morton curve.
-  std::vector<std::uint32_t> insertion_order() const {
-    std::vector<std::uint32_t> order(p_.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
+  std::vector<std::uint32_t> insertion_order(std::vector<std::uint32_t> order) const {
     std::mt19937_64 rng(0x484d43u);
     for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);
     auto morton = [&](std::uint32_t i) {
@@ -166,6 +187,55 @@ class Builder {
       for (std::uint32_t b = 1; b <= 4; ++b)
         if (a != b) link_hull_pair(a, b);
     last_ = c0;
+  }
+
+  // Cells of a finished tetrahedralization: finite cell t is tetrahedron t
+  // (positively oriented, neighbour k across the face opposite vertex k),
+  // then one hull cell per hull face, linked along the hull edges.
+  void seed(const std::vector<std::uint32_t>& index, const std::vector<std::array<std::uint32_t, 4>>& sub_tets,
+            const std::vector<std::array<std::uint32_t, 4>>& sub_nb) {
+    if (sub_tets.empty() || sub_nb.size() != sub_tets.size())
+      fail(Status::internal_error, "delaunay: nothing to refine");
+    for (const auto& t : sub_tets) {
+      std::array<std::uint32_t, 4> v{};
+      for (int k = 0; k < 4; ++k) {
+        if (t[k] >= index.size()) fail(Status::internal_error, "delaunay: seed vertex out of range");
+        v[k] = index[t[k]];
+      }
+      new_cell(v);
+    }
+    const auto finite = static_cast<std::uint32_t>(sub_tets.size());
+    edges_.clear();
+    for (std::uint32_t t = 0; t < finite; ++t)
+      for (int k = 0; k < 4; ++k) {
+        const std::uint32_t u = sub_nb[t][k];
+        if (u != kNoTet) {
+          if (u >= finite) fail(Status::internal_error, "delaunay: seed neighbour out of range");
+          cells_[t].n[k] = u;
+          continue;
+        }
+        const int* f = kFaceVertices[k];
+        const auto& v = cells_[t].v;
+        const std::uint32_t h = new_cell({v[f[0]], v[f[1]], v[f[2]], inf_});
+        cells_[t].n[k] = h;
+        cells_[h].n[3] = t;
+        // Hull cell h meets another along each hull edge: its face opposite
+        // finite vertex i holds inf and the other two.
+        for (int i = 0; i < 3; ++i) {
+          const std::uint32_t x = cells_[h].v[(i + 1) % 3], y = cells_[h].v[(i + 2) % 3];
+          const std::uint64_t key = (static_cast<std::uint64_t>(std::min(x, y)) << 32) | std::max(x, y);
+          edges_.push_back({key, h, i});
+        }
+      }
+    std::sort(edges_.begin(), edges_.end(), [](const EdgeSlot& a, const EdgeSlot& b) { return a.key < b.key; });
+    if (edges_.size() % 2 != 0) fail(Status::internal_error, "delaunay: seed hull not closed");
+    for (std::size_t i = 0; i + 1 < edges_.size(); i += 2) {
+      if (edges_[i].key != edges_[i + 1].key || (i + 2 < edges_.size() && edges_[i + 2].key == edges_[i].key))
+        fail(Status::internal_error, "delaunay: seed hull not closed");
+      cells_[edges_[i].cell].n[edges_[i].face] = edges_[i + 1].cell;
+      cells_[edges_[i + 1].cell].n[edges_[i + 1].face] = edges_[i].cell;
+    }
+    last_ = 0;
   }
 
   // Links hull cells a and b if they share an edge (two finite vertices).
@@ -309,6 +379,13 @@ class Builder {
 void native(const std::vector<GridPoint>& points, std::vector<std::array<std::uint32_t, 4>>& tets,
             std::vector<std::array<std::uint32_t, 4>>& neighbors, std::uint64_t max_cells) {
   Builder(points, max_cells).run(tets, neighbors);
+}
+
+void native_refine(const std::vector<GridPoint>& points, const std::vector<std::uint32_t>& index,
+                   std::vector<std::array<std::uint32_t, 4>>& sub_tets, std::vector<std::array<std::uint32_t, 4>>& sub_neighbors,
+                   std::vector<std::array<std::uint32_t, 4>>& tets, std::vector<std::array<std::uint32_t, 4>>& neighbors,
+                   std::uint64_t max_cells) {
+  Builder(points, max_cells).refine(index, sub_tets, sub_neighbors, tets, neighbors);
 }
 
 }  // namespace hmc::detail::backend
