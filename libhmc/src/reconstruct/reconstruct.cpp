@@ -292,13 +292,17 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
     for (auto v : dt.tets[t]) d += defects(v);
     return d;
   };
-  // Change of the interface's Euler characteristic restricted to t's own
-  // vertices, edges and faces (the only ones flipping t can change) when t
-  // flips from `from` to !from; on_before/on_after: t's vertices on the
-  // interface before and after.
-  auto euler_change = [&](std::uint32_t t, bool from, int on_before, int on_after) {
+  // Does the interface's Euler characteristic stay the same when t flips
+  // from `from` to !from? Only t's own vertices, edges and faces can change
+  // (on_before/on_after: t's vertices on the interface before and after).
+  auto euler_kept = [&](std::uint32_t t, bool from, int on_before, int on_after) {
     int chi = on_after - on_before;
     for (int k = 0; k < 4; ++k) chi += face_on(t, k, !from) - face_on(t, k, from);
+    // An edge of t whose own two faces go on (off) the interface leaves
+    // (joins) it, -1 (+1), unless another face around it keeps it on: a
+    // walk around the edge tells. The walks come last, and stop as soon as
+    // the edges left cannot bring chi back to 0.
+    int edge[6][3], ne = 0, lo = 0, hi = 0;
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) {
         int f[2], m = 0;
@@ -307,10 +311,17 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         const bool before = face_on(t, f[0], from) || face_on(t, f[1], from);
         const bool after = face_on(t, f[0], !from) || face_on(t, f[1], !from);
         if (before == after) continue;  // the ring walk cannot change the answer
-        if (ring_on(t, i, j)) continue;
-        chi -= (after ? 1 : 0) - (before ? 1 : 0);
+        const int delta = before ? 1 : -1;
+        edge[ne][0] = i, edge[ne][1] = j, edge[ne][2] = delta, ++ne;
+        (delta > 0 ? hi : lo) += delta;
       }
-    return chi;
+    for (int e = 0; e < ne; ++e) {
+      if (chi + lo > 0 || chi + hi < 0) return false;  // 0 is out of reach
+      const int delta = edge[e][2];
+      (delta > 0 ? hi : lo) -= delta;
+      if (!ring_on(t, edge[e][0], edge[e][1])) chi += delta;
+    }
+    return chi == 0;
   };
   // A try at t reads only the labels of tetrahedra incident to t's
   // vertices, all of them neighbours of v. So a vertex whose last visit
@@ -374,9 +385,9 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
             if (j != k) on = face_on(t, j, !from);
           on_after += on ? 1 : on_interface(tv[k]);
         }
-        // Labels are flipped here: euler_change reads t's label from `from`
+        // Labels are flipped here: euler_kept reads t's label from `from`
         // only, its neighbours' from `inside`.
-        if (euler_change(t, from, on_before, on_after) != 0) {
+        if (!euler_kept(t, from, on_before, on_after)) {
           inside[t] ^= 1;
           try_failed_at[t] = clock;
           continue;
