@@ -211,7 +211,9 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
         std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), level.points.begin());
       }
       level.stream_bytes = c.offset + kChunkOverhead + c.length;
-      previous_points = level.points;
+      // A copy for the next layer, when one may follow.
+      if (k + 1 < counts.size() && level.lod > options.finest_level) previous_points = level.points;
+      else std::vector<GridPoint>().swap(previous_points);
       s_->memory += level.points.size() * sizeof(GridPoint);
       if (walk.needs_recon()) {
         pending = std::move(level);
