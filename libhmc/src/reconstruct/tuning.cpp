@@ -186,13 +186,20 @@ class TargetCleaner {
           const std::uint32_t t = incident_[i];
           if (!flippable_.empty() && !flippable_[t]) continue;
           const int before = around(t);
+          const auto& tv = dt_.tets[t];
+          const int was[4] = {cache[tv[0]], cache[tv[1]], cache[tv[2]], cache[tv[3]]};
           flip(t);
-          if (around(t) < before) {
+          // Defects are never negative: stop adding once the sum reaches
+          // the old one.
+          int after = 0;
+          for (int k = 0; k < 4 && after < before; ++k) after += defects(tv[k]);
+          if (after < before) {
             changed = true;
             ++flips;
             if (defects(v) == 0) break;
           } else {
-            flip(t);
+            inside[t] ^= 1;  // back: the cached defects are the old ones again
+            for (int k = 0; k < 4; ++k) cache[tv[k]] = was[k];
           }
         }
       }
