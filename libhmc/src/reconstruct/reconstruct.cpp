@@ -480,18 +480,23 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        std::uint32_t rank) {
   const std::size_t n = points.size();
+  // Edge (a, b), a < b < n, as the key a·2^w + b with w the bits of n - 1:
+  // the radix sort then makes as few passes as the indices need.
+  int w = 1;
+  while (w < 32 && ((n - 1) >> w) != 0) ++w;
+  const std::uint64_t low = (std::uint64_t{1} << w) - 1;
   std::vector<std::uint64_t> keys;
   keys.reserve(dt.tets.size() * 6);
   for (const auto& t : dt.tets)
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) {
         const std::uint64_t a = std::min(t[i], t[j]), b = std::max(t[i], t[j]);
-        keys.push_back((a << 32) | b);
+        keys.push_back((a << w) | b);
       }
-  radix_sort(keys, 64);
+  radix_sort(keys, 2 * w);
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   std::vector<std::uint32_t> start(n + 1, 0);
-  for (std::uint64_t k : keys) ++start[k >> 32], ++start[k & 0xffffffffu];
+  for (std::uint64_t k : keys) ++start[k >> w], ++start[k & low];
   for (std::size_t v = 0, sum = 0; v <= n; ++v) {
     const std::size_t c = v < n ? start[v] : 0;
     start[v] = static_cast<std::uint32_t>(sum);
@@ -500,7 +505,7 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
   std::vector<std::uint64_t> len(keys.size() * 2);
   std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
   for (std::uint64_t k : keys) {
-    const auto a = static_cast<std::uint32_t>(k >> 32), b = static_cast<std::uint32_t>(k & 0xffffffffu);
+    const auto a = static_cast<std::uint32_t>(k >> w), b = static_cast<std::uint32_t>(k & low);
     const std::uint64_t d = dist2(points[a], points[b]);
     len[fill[a]++] = d;
     len[fill[b]++] = d;
