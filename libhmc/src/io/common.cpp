@@ -156,6 +156,16 @@ void append_real(std::string& out, double v, int precision) {
   out.append(buf, static_cast<std::size_t>(r.ptr - buf));
 }
 
+void append_point_line(std::string& out, const char* prefix, const Vec3& p, int precision) {
+  out += prefix;
+  append_real(out, p[0], precision);
+  out += ' ';
+  append_real(out, p[1], precision);
+  out += ' ';
+  append_real(out, p[2], precision);
+  out += '\n';
+}
+
 namespace {
 
 template <class U>

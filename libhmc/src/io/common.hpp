@@ -114,6 +114,8 @@ void append_bytes(std::string& out, U v, bool big_endian) {
   }
   out.append(b, sizeof(U));
 }
+/// Append `prefix`, then "x y z" as append_real writes them, and a newline.
+void append_point_line(std::string& out, const char* prefix, const Vec3& p, int precision);
 /// Append the coordinates of every point, x y z, as binary64 or (float32)
 /// rounded to binary32, in one resize of `out`.
 void append_points(std::string& out, const std::vector<Vec3>& points, bool float32, bool big_endian);

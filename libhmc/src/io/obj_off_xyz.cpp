@@ -28,16 +28,6 @@ void add_point(Input& in, Mesh& m, const Vec3& p) {
   m.points.push_back(p);
 }
 
-void append_point_line(std::string& out, const char* prefix, const Vec3& p, int precision) {
-  out += prefix;
-  append_real(out, p[0], precision);
-  out += ' ';
-  append_real(out, p[1], precision);
-  out += ' ';
-  append_real(out, p[2], precision);
-  out += '\n';
-}
-
 }  // namespace
 
 Mesh read_obj(const std::string& name, std::string_view data) {

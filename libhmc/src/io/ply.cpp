@@ -314,14 +314,7 @@ std::string write_ply(const Mesh& m, const WriteOptions& opt) {
     }
     return out;
   }
-  for (const Vec3& p : m.points) {
-    append_real(out, p[0], opt.precision);
-    out += ' ';
-    append_real(out, p[1], opt.precision);
-    out += ' ';
-    append_real(out, p[2], opt.precision);
-    out += '\n';
-  }
+  for (const Vec3& p : m.points) append_point_line(out, "", p, opt.precision);
   for (const Triangle& t : m.triangles) {
     out += "3 ";
     append_uint(out, t[0]);

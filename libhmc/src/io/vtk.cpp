@@ -356,14 +356,7 @@ std::string write_vtk(const Mesh& m, const WriteOptions& opt) {
   if (bin) {
     append_points(out, m.points, f32, true);
   } else {
-    for (const Vec3& p : m.points) {
-      append_real(out, p[0], opt.precision);
-      out += ' ';
-      append_real(out, p[1], opt.precision);
-      out += ' ';
-      append_real(out, p[2], opt.precision);
-      out += '\n';
-    }
+    for (const Vec3& p : m.points) append_point_line(out, "", p, opt.precision);
   }
   if (bin) out += '\n';
   if (ncells == 0) return out;
@@ -419,15 +412,7 @@ std::string write_vtu(const Mesh& m, const WriteOptions& opt) {
       "\">\n"
       "      <Points>\n"
       "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const Vec3& p : m.points) {
-    out += "          ";
-    append_real(out, p[0], opt.precision);
-    out += ' ';
-    append_real(out, p[1], opt.precision);
-    out += ' ';
-    append_real(out, p[2], opt.precision);
-    out += '\n';
-  }
+  for (const Vec3& p : m.points) append_point_line(out, "          ", p, opt.precision);
   out +=
       "        </DataArray>\n"
       "      </Points>\n"
