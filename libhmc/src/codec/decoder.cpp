@@ -245,7 +245,8 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
         pending->tetrahedra = std::move(rec.tetrahedra);
         s_->memory += (pending->triangles.size() + pending->tetrahedra.size()) * kSimplexBytes;
         const std::uint64_t keep = dt.tets.size() * 2 * sizeof(dt.tets[0]);
-        if (pending->lod > std::max(options.finest_level, 0) && keep <= options.limits.max_memory - s_->memory) {
+        const std::uint64_t max = options.limits.max_memory;
+        if (pending->lod > std::max(options.finest_level, 0) && s_->memory <= max && keep <= max - s_->memory) {
           s_->previous_dt = std::move(dt);
           s_->previous_dt_bytes = keep;
           s_->memory += keep;

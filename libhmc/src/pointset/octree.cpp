@@ -47,13 +47,14 @@ struct MortonChunks {
 GridPoint morton_point(std::uint64_t key, int q) {
   static const MortonChunks table;
   GridPoint p{0, 0, 0};
+  // A key of depth q has no bits at or above 3q, so the last chunk may
+  // reach past them.
   for (int b = 0; b < q; b += 3) {
     const std::uint32_t e = table.xyz[(key >> (3 * b)) & 511u];
     p[0] |= (e >> 6) << b;
     p[1] |= ((e >> 3) & 7u) << b;
     p[2] |= (e & 7u) << b;
   }
-  // Bits at or above q are zero in a key of depth q, so whole chunks are safe.
   return p;
 }
 
@@ -348,9 +349,6 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
   return best;
 }
 
-// Both coders' symbol streams after their tables (spec 8.1, 8.2): ranked[d]
-// says whether depth d sends ranked occupancies (coder 0: none).
-// codes[d][j]: the table of depth d for context j (one at plain depths).
 // The number of children an occupancy byte names (a table: without a
 // popcount instruction in the target, the builtin is a library call).
 constexpr std::array<std::uint8_t, 256> kChildCount = [] {
@@ -358,6 +356,10 @@ constexpr std::array<std::uint8_t, 256> kChildCount = [] {
   for (std::size_t i = 1; i < 256; ++i) t[i] = static_cast<std::uint8_t>(t[i / 2] + (i & 1));
   return t;
 }();
+
+// Both coders' symbol streams after their tables (spec 8.1, 8.2): ranked[d]
+// says whether depth d sends ranked occupancies (coder 0: none).
+// codes[d][j]: the table of depth d for context j (one at plain depths).
 
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,

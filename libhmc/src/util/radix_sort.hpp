@@ -18,24 +18,24 @@ inline void radix_sort(std::vector<std::uint64_t>& keys, int key_bits, std::vect
     return;
   }
   // As few passes as digits of at most 12 bits allow (4,096 counters stay
-  // in the first-level cache), the bits shared out evenly among them.
+  // in cache), the bits shared out evenly among them.
   const int passes = std::max(1, (key_bits + 11) / 12);
   const int digit = (key_bits + passes - 1) / passes;
-  const std::size_t kBuckets = std::size_t{1} << digit;
+  const std::size_t buckets = std::size_t{1} << digit;
   std::vector<std::uint64_t>& tmp = scratch;
   tmp.resize(keys.size());
-  std::vector<std::size_t> count(kBuckets);
+  std::vector<std::size_t> count(buckets);
   for (int shift = 0; shift < key_bits; shift += digit) {
     std::fill(count.begin(), count.end(), 0);
-    for (std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
-    if (count[(keys[0] >> shift) & (kBuckets - 1)] == keys.size()) continue;  // one digit: already in order
+    for (std::uint64_t k : keys) ++count[(k >> shift) & (buckets - 1)];
+    if (count[(keys[0] >> shift) & (buckets - 1)] == keys.size()) continue;  // one digit: already in order
     std::size_t sum = 0;
     for (auto& c : count) {
       const std::size_t n = c;
       c = sum;
       sum += n;
     }
-    for (std::uint64_t k : keys) tmp[count[(k >> shift) & (kBuckets - 1)]++] = k;
+    for (std::uint64_t k : keys) tmp[count[(k >> shift) & (buckets - 1)]++] = k;
     keys.swap(tmp);
   }
 }
