@@ -16,6 +16,7 @@
 #include "pointset/octree.hpp"
 #include "pointset/refine.hpp"
 #include "samples.hpp"
+#include "util/radix_sort.hpp"
 
 using namespace hmc;
 using namespace hmc::detail;
@@ -529,4 +530,36 @@ TEST_CASE("base layer: the ranked octree (coder 1) codes surfaces smaller and de
   CHECK(status_of([&] { decode_base(two, 0, 4, 1); }) == Status::bad_layer);
   CHECK(status_of([&] { decode_base(base.data(), base.size(), 12, sorted.size() - 1); }) == Status::bad_layer);
   CHECK(status_of([&] { decode_base(base.data(), base.size() - 1, 12, sorted.size()); }) == Status::bad_layer);
+}
+
+// The sorting and Morton helpers every layer decoder ends with.
+TEST_CASE("radix_sort, morton_point and sort_canonical agree with the plain definitions") {
+  std::mt19937_64 rng(5);
+  for (int bits : {0, 1, 7, 13, 24, 36, 47, 63, 64}) {
+    for (std::size_t n : {std::size_t{0}, std::size_t{5}, std::size_t{255}, std::size_t{256}, std::size_t{5000}}) {
+      INFO("bits " << bits << ", n " << n);
+      std::vector<std::uint64_t> keys(n);
+      const std::uint64_t mask = bits == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << bits) - 1;
+      for (auto& k : keys) k = rng() & mask;
+      if (n > 10) keys[3] = keys[7];  // a repeated key
+      auto want = keys;
+      std::sort(want.begin(), want.end());
+      radix_sort(keys, bits);
+      CHECK(keys == want);
+    }
+  }
+  for (int q : {1, 2, 3, 4, 12, 20, 21}) {
+    INFO("q " << q);
+    std::uniform_int_distribution<std::uint32_t> u(0, (1u << q) - 1);
+    Points points;
+    for (int i = 0; i < 3000; ++i) {
+      const GridPoint p{u(rng), u(rng), u(rng)};
+      CHECK(morton_point(morton_key(p, q), q) == p);
+      points.push_back(p);
+    }
+    auto want = points;
+    std::sort(want.begin(), want.end());  // std::array: x, then y, then z
+    sort_canonical(points);
+    CHECK(points == want);
+  }
 }
