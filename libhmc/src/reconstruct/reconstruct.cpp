@@ -39,12 +39,13 @@ bool candidate(const std::vector<GridPoint>& pts, const std::vector<std::uint64_
 __extension__ typedef unsigned __int128 U128;
 
 // Exact parts of a triangle: squared edge lengths e[i] (edge opposite
-// vertex i), N = e0·e1·e2 and D = |(q − p) × (r − p)|² (= 16·area²/4), so
-// that R² = N / (4D).
+// vertex i) and D = |(q − p) × (r − p)|² (= 16·area²/4), so that
+// R² = N / (4D) with N = e0·e1·e2 (num(), computed when needed: the filters
+// keep one of these per face, and their memory makes a decoder's peak).
 struct TriangleParts {
   std::uint64_t e[3];
-  U256 n;
   U128 d;
+  U256 num() const { return U256::from(e[0]).mul(e[1]).mul(e[2]); }
 };
 
 TriangleParts parts_of(const std::vector<GridPoint>& pts, const std::array<std::uint32_t, 3>& f) {
@@ -53,7 +54,6 @@ TriangleParts parts_of(const std::vector<GridPoint>& pts, const std::array<std::
   t.e[0] = dist2(q, r);
   t.e[1] = dist2(r, p);
   t.e[2] = dist2(p, q);
-  t.n = U256::from(t.e[0]).mul(t.e[1]).mul(t.e[2]);
   std::int64_t u[3], v[3];
   for (int i = 0; i < 3; ++i) {
     u[i] = static_cast<std::int64_t>(q[i]) - p[i];
@@ -96,7 +96,10 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
   std::sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
     return a.key != b.key ? a.key < b.key : a.slot < b.slot;
   });
+  std::size_t unique = 0;
+  for (std::size_t i = 0; i < slots.size(); ++i) unique += i == 0 || slots[i].key != slots[i - 1].key;
   std::vector<std::array<std::uint32_t, 3>> faces;
+  faces.reserve(unique);
   std::vector<std::uint32_t> face_of_slot(slots.size()), slot_ids(slots.size());
   for (std::size_t i = 0; i < slots.size(); ++i) {
     if (i == 0 || slots[i].key != slots[i - 1].key) faces.push_back(slots[i].key);
@@ -116,7 +119,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     const TriangleParts& t = tp[i];
     const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
     // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
-    if (th[kCircleRadius] && compare(t.n.mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
+    if (th[kCircleRadius] && compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
       keep[i] = 0;
     // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
     if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
@@ -132,6 +135,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       std::uint32_t face;
     };
     std::vector<EdgeRef> refs;
+    refs.reserve(3 * static_cast<std::size_t>(std::count(keep.begin(), keep.end(), std::uint8_t{1})));
     for (std::uint32_t i = 0; i < nf; ++i) {
       if (!keep[i]) continue;
       const auto& f = faces[i];
@@ -149,7 +153,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     auto r_less = [&](std::uint32_t a, std::uint32_t b) {  // R²(a) < R²(b)
       const bool ia = tp[a].d == 0, ib = tp[b].d == 0;
       if (ia || ib) return !ia && ib;
-      return compare(tp[a].n.mul(hi(tp[b].d), lo(tp[b].d)), tp[b].n.mul(hi(tp[a].d), lo(tp[a].d))) < 0;
+      return compare(tp[a].num().mul(hi(tp[b].d), lo(tp[b].d)), tp[b].num().mul(hi(tp[a].d), lo(tp[a].d))) < 0;
     };
     auto ratio_less = [&](std::uint32_t a, std::uint32_t b) {  // Lmin²/Lmax² of a < of b
       const auto& x = tp[a].e;
@@ -183,8 +187,8 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       const std::uint32_t g = max_r[f];
       // A collinear neighbour (D_g = 0) has an infinite circumradius: keep.
       if (th[kNeighbourRadius] && tp[g].d != 0 &&
-          (tp[f].d == 0 || compare(tp[f].n.mul(hi(tp[g].d), lo(tp[g].d)).mul(256),
-                                   tp[g].n.mul(hi(tp[f].d), lo(tp[f].d)).mul(th[kNeighbourRadius])) > 0))
+          (tp[f].d == 0 || compare(tp[f].num().mul(hi(tp[g].d), lo(tp[g].d)).mul(256),
+                                   tp[g].num().mul(hi(tp[f].d), lo(tp[f].d)).mul(th[kNeighbourRadius])) > 0))
         next[f] = 0;
       // (f) neighbour min/max edge ratio: 256·r(f) >= T·r(h), h the
       // neighbour with the largest ratio r = Lmin²/Lmax².
