@@ -215,7 +215,7 @@ class Builder {
           continue;
         }
         const int* f = kFaceVertices[k];
-        const auto& v = cells_[t].v;
+        const std::array<std::uint32_t, 4> v = cells_[t].v;  // a copy: new_cell may move the cells
         const std::uint32_t h = new_cell({v[f[0]], v[f[1]], v[f[2]], inf_});
         cells_[t].n[k] = h;
         cells_[h].n[3] = t;
