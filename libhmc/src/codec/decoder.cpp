@@ -151,8 +151,15 @@ struct ChunkDecoder::State {
   std::uint64_t previous_dt_bytes = 0;
 
   // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
-  void reserve(std::uint64_t bytes, const std::string& what) const {
+  // The kept tetrahedralization only saves time: it goes first, so that no
+  // stream fails that would decode without it.
+  void reserve(std::uint64_t bytes, const std::string& what) {
     const std::uint64_t max = options.limits.max_memory;
+    if (previous_dt && (bytes > max || memory > max - bytes)) {
+      previous_dt.reset();
+      memory -= previous_dt_bytes;
+      previous_dt_bytes = 0;
+    }
     if (bytes > max || memory > max - bytes)
       fail(Status::limit_exceeded, what + " needs about " + std::to_string(bytes) + " bytes, and " +
                                        std::to_string(memory) + " are in use, over the memory limit of " +
