@@ -29,6 +29,7 @@
 #include "delaunay/delaunay.hpp"
 #include "delaunay/predicates.hpp"
 #include "util/error.hpp"
+#include "util/morton.hpp"
 
 namespace hmc::detail::backend {
 
@@ -107,18 +108,12 @@ class Builder {
   std::vector<std::uint32_t> insertion_order(std::vector<std::uint32_t> order) const {
     std::mt19937_64 rng(0x484d43u);
     for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);
-    auto morton = [&](std::uint32_t i) {
-      std::uint64_t k = 0;
-      for (int b = 20; b >= 0; --b)
-        for (int a = 0; a < 3; ++a) k = (k << 1) | ((p_[i][a] >> b) & 1u);
-      return k;
-    };
     std::size_t hi = order.size();
     while (hi > 0) {
       const std::size_t lo = hi > 64 ? hi / 8 : 0;
       std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
       keyed.reserve(hi - lo);
-      for (std::size_t i = lo; i < hi; ++i) keyed.push_back({morton(order[i]), order[i]});
+      for (std::size_t i = lo; i < hi; ++i) keyed.push_back({morton_key(p_[order[i]], 21), order[i]});
       std::sort(keyed.begin(), keyed.end());
       for (std::size_t i = lo; i < hi; ++i) order[i] = keyed[i - lo].second;
       hi = lo;

@@ -15,13 +15,6 @@
 
 namespace hmc::detail {
 
-std::uint64_t morton_key(const GridPoint& p, int q) {
-  std::uint64_t key = 0;
-  for (int b = q - 1; b >= 0; --b)
-    key = (key << 3) | (((p[0] >> b) & 1u) << 2) | (((p[1] >> b) & 1u) << 1) | ((p[2] >> b) & 1u);
-  return key;
-}
-
 namespace {
 
 // Three tree levels at a time: entry k of the table spreads the 9-bit Morton
@@ -360,7 +353,6 @@ constexpr std::array<std::uint8_t, 256> kChildCount = [] {
 // Both coders' symbol streams after their tables (spec 8.1, 8.2): ranked[d]
 // says whether depth d sends ranked occupancies (coder 0: none).
 // codes[d][j]: the table of depth d for context j (one at plain depths).
-
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,
                                     int neighbours) {

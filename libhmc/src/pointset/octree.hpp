@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hmc/codec.hpp"
+#include "util/morton.hpp"
 
 namespace hmc::detail {
 
@@ -32,10 +33,8 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 /// canonical order; bad_layer for an unknown coder.
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n);
 
-/// Morton key of a point: bits interleaved x, y, z from the most significant
-/// bit down, so that the 3-bit group at depth d is the child index
-/// (x_bit << 2) | (y_bit << 1) | z_bit.
-std::uint64_t morton_key(const GridPoint& p, int q);
+/// The point of a Morton key of depth q (the inverse of morton_key,
+/// util/morton.hpp).
 GridPoint morton_point(std::uint64_t key, int q);
 
 /// Sort points into canonical order (ascending x, then y, then z).

@@ -282,12 +282,8 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
     for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
       const std::uint32_t t = incident[i];
       if (!inside[t]) continue;
-      const auto& tet = dt.tets[t];
-      for (int k = 0; k < 4; ++k) {
-        if (tet[k] == v) continue;  // the face opposite v does not contain it
-        const std::uint32_t u = dt.neighbors[t][k];
-        if (u == kNoTet || !inside[u]) return 1;
-      }
+      for (int k = 0; k < 4; ++k)  // the face opposite v does not contain it
+        if (dt.tets[t][k] != v && face_on(t, k, true)) return 1;
     }
     return 0;
   };

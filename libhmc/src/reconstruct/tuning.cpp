@@ -6,6 +6,7 @@
 
 #include "reconstruct/distance.hpp"
 #include "reconstruct/winding.hpp"
+#include "util/morton.hpp"
 #include "util/radix_sort.hpp"
 
 namespace hmc::detail {
@@ -306,9 +307,7 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   std::vector<std::uint64_t> order(nt);
   for (std::size_t t = 0; t < nt; ++t) {
     const GridPoint& p = points[dt.tets[t][0]];
-    std::uint64_t key = 0;
-    for (int b = 11; b >= 0 && reorder; --b)
-      for (int a = 0; a < 3; ++a) key = key << 1 | ((p[static_cast<std::size_t>(a)] >> (shift + b)) & 1u);
+    const std::uint64_t key = reorder ? morton_key({p[0] >> shift, p[1] >> shift, p[2] >> shift}, 12) : 0;
     order[t] = key << kIndexBits | t;
   }
   if (reorder) radix_sort(order, 64);
