@@ -40,8 +40,7 @@ __extension__ typedef unsigned __int128 U128;
 
 // Exact parts of a triangle: squared edge lengths e[i] (edge opposite
 // vertex i) and D = |(q − p) × (r − p)|² (= 16·area²/4), so that
-// R² = N / (4D) with N = e0·e1·e2 (num(), computed when needed: the filters
-// keep one of these per face, and their memory makes a decoder's peak).
+// R² = N / (4D) with N = e0·e1·e2 (num(), computed when needed).
 struct TriangleParts {
   std::uint64_t e[3];
   U128 d;
@@ -110,13 +109,15 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
   // filters' working memory is most of a decoder's peak).
   std::vector<Slot>().swap(slots);
   const std::size_t nf = faces.size();
-  std::vector<TriangleParts> tp(nf);
+  // A face's parts are recomputed from its vertices whenever they are
+  // needed (a few products): storing them would cost 48 bytes per face,
+  // four times the face itself, at the moment of a decoder's peak.
+  auto parts = [&](std::uint32_t i) { return parts_of(pts, faces[i]); };
   std::vector<std::uint8_t> keep(nf, 1);
   for (std::size_t i = 0; i < nf; ++i) {
     const auto& f = faces[i];
-    tp[i] = parts_of(pts, f);
+    const TriangleParts t = parts_of(pts, f);
     const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
-    const TriangleParts& t = tp[i];
     const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
     // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
     if (th[kCircleRadius] && compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
@@ -130,9 +131,9 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
   // Edge adjacency among the faces kept so far, for the neighbour filters.
   const bool neighbours = th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio];
   if (neighbours) {
+    // 12 bytes per reference (an edge is the vertex pair (a, b), a < b).
     struct EdgeRef {
-      std::uint64_t edge;
-      std::uint32_t face;
+      std::uint32_t a, b, face;
     };
     std::vector<EdgeRef> refs;
     refs.reserve(3 * static_cast<std::size_t>(std::count(keep.begin(), keep.end(), std::uint8_t{1})));
@@ -140,39 +141,48 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       if (!keep[i]) continue;
       const auto& f = faces[i];
       for (int a = 0; a < 3; ++a)
-        for (int b = a + 1; b < 3; ++b) refs.push_back({(std::uint64_t{f[a]} << 32) | f[b], i});
+        for (int b = a + 1; b < 3; ++b) refs.push_back({f[a], f[b], i});
     }
-    std::vector<std::array<std::uint32_t, 3>>().swap(faces);  // the references hold the edges now
     std::sort(refs.begin(), refs.end(), [](const EdgeRef& x, const EdgeRef& y) {
-      return x.edge != y.edge ? x.edge < y.edge : x.face < y.face;
+      return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.face < y.face;
     });
     // For each face: does it have a neighbour, the largest neighbour R² and
     // the largest neighbour edge ratio (as fractions compared exactly).
     std::vector<std::uint8_t> has(nf, 0);
     std::vector<std::uint32_t> max_r(nf, ~0u), max_ratio(nf, ~0u);
-    auto r_less = [&](std::uint32_t a, std::uint32_t b) {  // R²(a) < R²(b)
-      const bool ia = tp[a].d == 0, ib = tp[b].d == 0;
+    auto r_less = [](const TriangleParts& a, const TriangleParts& b) {  // R²(a) < R²(b)
+      const bool ia = a.d == 0, ib = b.d == 0;
       if (ia || ib) return !ia && ib;
-      return compare(tp[a].num().mul(hi(tp[b].d), lo(tp[b].d)), tp[b].num().mul(hi(tp[a].d), lo(tp[a].d))) < 0;
+      return compare(a.num().mul(hi(b.d), lo(b.d)), b.num().mul(hi(a.d), lo(a.d))) < 0;
     };
-    auto ratio_less = [&](std::uint32_t a, std::uint32_t b) {  // Lmin²/Lmax² of a < of b
-      const auto& x = tp[a].e;
-      const auto& y = tp[b].e;
+    auto ratio_less = [](const TriangleParts& a, const TriangleParts& b) {  // Lmin²/Lmax² of a < of b
+      const auto& x = a.e;
+      const auto& y = b.e;
       const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
       const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
       return xn * yd < yn * xd;
     };
+    std::vector<TriangleParts> group;  // the parts of the faces around one edge
     for (std::size_t i = 0; i < refs.size();) {
       std::size_t j = i;
-      while (j < refs.size() && refs[j].edge == refs[i].edge) ++j;
-      for (std::size_t a = i; a < j; ++a)
-        for (std::size_t b = i; b < j; ++b) {
-          if (a == b) continue;
-          const std::uint32_t f = refs[a].face, g = refs[b].face;
+      while (j < refs.size() && refs[j].a == refs[i].a && refs[j].b == refs[i].b) ++j;
+      if (j - i > 1) {
+        group.clear();
+        for (std::size_t a = i; a < j; ++a) group.push_back(parts(refs[a].face));
+        for (std::size_t a = i; a < j; ++a) {
+          const std::uint32_t f = refs[a].face;
           has[f] = 1;
-          if (max_r[f] == ~0u || r_less(max_r[f], g)) max_r[f] = g;
-          if (max_ratio[f] == ~0u || ratio_less(max_ratio[f], g)) max_ratio[f] = g;
+          // The best neighbour around this edge, then against the best so far.
+          std::size_t br = j, bq = j;
+          for (std::size_t b = i; b < j; ++b) {
+            if (a == b) continue;
+            if (br == j || r_less(group[br - i], group[b - i])) br = b;
+            if (bq == j || ratio_less(group[bq - i], group[b - i])) bq = b;
+          }
+          if (max_r[f] == ~0u || r_less(parts(max_r[f]), group[br - i])) max_r[f] = refs[br].face;
+          if (max_ratio[f] == ~0u || ratio_less(parts(max_ratio[f]), group[bq - i])) max_ratio[f] = refs[bq].face;
         }
+      }
       i = j;
     }
     std::vector<EdgeRef>().swap(refs);
@@ -182,20 +192,22 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       // (d) lone triangle: no edge shared with another kept face.
       if (th[kLone] && !has[f]) next[f] = 0;
       if (!has[f]) continue;
+      const TriangleParts tf = parts(f);
       // (e) neighbour circle radius ratio: 256·R²(f) <= T·R²(g), g the
       // neighbour of largest circumradius: 256·N_f·D_g <= T·N_g·D_f.
-      const std::uint32_t g = max_r[f];
-      // A collinear neighbour (D_g = 0) has an infinite circumradius: keep.
-      if (th[kNeighbourRadius] && tp[g].d != 0 &&
-          (tp[f].d == 0 || compare(tp[f].num().mul(hi(tp[g].d), lo(tp[g].d)).mul(256),
-                                   tp[g].num().mul(hi(tp[f].d), lo(tp[f].d)).mul(th[kNeighbourRadius])) > 0))
-        next[f] = 0;
+      if (th[kNeighbourRadius]) {
+        const TriangleParts tg = parts(max_r[f]);
+        // A collinear neighbour (D_g = 0) has an infinite circumradius: keep.
+        if (tg.d != 0 && (tf.d == 0 || compare(tf.num().mul(hi(tg.d), lo(tg.d)).mul(256),
+                                               tg.num().mul(hi(tf.d), lo(tf.d)).mul(th[kNeighbourRadius])) > 0))
+          next[f] = 0;
+      }
       // (f) neighbour min/max edge ratio: 256·r(f) >= T·r(h), h the
       // neighbour with the largest ratio r = Lmin²/Lmax².
-      const std::uint32_t h = max_ratio[f];
       if (th[kNeighbourRatio]) {
-        const auto& x = tp[f].e;
-        const auto& y = tp[h].e;
+        const TriangleParts tr = parts(max_ratio[f]);
+        const auto& x = tf.e;
+        const auto& y = tr.e;
         const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
         const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
         if (compare(U256::from(256).mul(hi(xn * yd), lo(xn * yd)), U256::from(th[kNeighbourRatio]).mul(hi(yn * xd), lo(yn * xd))) < 0)
@@ -686,6 +698,7 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
   r.inside = inside;
   const std::size_t nt = dt.tets.size();
   if (kind == Kind::volume) {
+    r.tetrahedra.reserve(static_cast<std::size_t>(std::count_if(inside.begin(), inside.end(), [](std::uint8_t x) { return x != 0; })));
     for (std::size_t t = 0; t < nt; ++t)
       if (inside[t]) r.tetrahedra.push_back(dt.tets[t]);
     return r;
@@ -697,6 +710,12 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
     return !p.drops.empty() &&
            std::binary_search(p.drops.begin(), p.drops.end(), static_cast<std::uint32_t>(4 * t + static_cast<std::size_t>(k)));
   };
+  // Reserve for every interface face (border and drop lists remove few).
+  std::size_t interface = 0;
+  for (std::size_t t = 0; t < nt; ++t)
+    if (inside[t])
+      for (int k = 0; k < 4; ++k) interface += dt.neighbors[t][k] == kNoTet || !inside[dt.neighbors[t][k]];
+  r.triangles.reserve(interface);
   for (std::size_t t = 0; t < nt; ++t) {
     if (!inside[t]) continue;
     for (int k = 0; k < 4; ++k) {
