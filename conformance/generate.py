@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x08"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x09"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -1034,6 +1034,26 @@ def hb_rcon_compact_volume():
     return hand_stream(2, q, lv, [(1, 2, True)], rcons=[rc0, rc1])
 
 
+def hb_rcon_border_inherit():
+    # Flag bit 3 over three levels of a sphere whose border set is a polar
+    # cap (so the border rule opens a hole): the coarsest level inherits the
+    # empty set; the middle level lists its set in full; the finest lists
+    # changes to it (two inherited points removed, three cap points added).
+    q = 6
+    pts = sphere_pts(150, q, 51)
+    lv = nested(pts, [40, 80, 150], 52)
+    n0, n1, n2 = len(lv[0]), len(lv[1]), len(lv[2])
+    cap = lambda level, z: tuple(i for i, p in enumerate(level) if p[2] >= z)
+    b1 = cap(lv[1], 50)
+    inherited = sorted(lv[2].index(lv[1][i]) for i in b1)
+    removed = inherited[1:3]
+    added = [i for i in cap(lv[2], 50) if i not in inherited][:3]
+    rc0 = rcon_payload(n0, flags=1 | 8, multipliers=(1500,), border=cap(lv[0], 50))
+    rc1 = rcon_payload(n1, flags=1, multipliers=(1500,), border=b1)
+    rc2 = rcon_payload(n2, flags=1 | 8, multipliers=(1500,), border=tuple(sorted(removed + added)))
+    return hand_stream(1, q, lv, [(4, 1, True), (4, 2, True)], rcons=[rc0, rc1, rc2])
+
+
 def hb_base_ranked_sphere():
     return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8, classes=4)
 
@@ -1190,6 +1210,8 @@ HANDBUILT = [
      "hand-built layers on a lattice: many equidistant neighbours and equal keys", sec("refn")),
     ("rcon-handbuilt-surface", hb_rcon_surface, F,
      "hand-written RCON: peel and repair off and on, filters 0, 2, 3 then all six, K = 3 and 2 (class bit streams), border, toggle and drop lists; origin and step not the encoder's", sec("rcon", "recon", "sqnt")),
+    ("rcon-border-inherit", hb_rcon_border_inherit, F,
+     "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
      "BASE coder 1 (ranked octree): neighbours = 10, four contexts, every depth ranked, points on a sphere", sec("base", "refn")),
     ("base-ranked-mixed", hb_base_ranked_mixed, P,
@@ -1456,8 +1478,8 @@ NEGATIVE = [
     ("neg-refn-count", "bad_layer", P, "a REFN adding two points where one is declared", ["8A.1", "13"],
      lambda: stream_q1_refn(refn_single(8))),
     # RCON
-    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x08 (a reserved bit)", ["10", "13"],
-     lambda: surface_one_level(rcon_payload(30, flags=8))),
+    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x10 (a reserved bit)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, flags=16))),
     ("neg-rcon-class-alphabet", "bad_layer", P, "compact classes: K = 17 in groups of 3 (4913 symbols > 4096)", ["10.1", "13"],
      lambda: surface_one_level(rcon_payload(30, multipliers=tuple(range(300, 317)), compact=True,
                                             class_code_bits=bits_payload(lambda bw: (bw.put(2, 3), bw.put(1, 1), bw.put(0, 13)))))),

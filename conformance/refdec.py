@@ -520,7 +520,7 @@ def decode_vq(payload, q, coarse, n, codebook):
 def parse_rcon(payload, n):
     r = ByteReader(payload, "bad_layer", "RCON")
     flags = r.u8()
-    if flags & 0xF8:
+    if flags & 0xF0:  # bit 3 (inherit_border) changes only what the border list means
         r.fail("reserved flag bits set (flags = %d)" % flags)
     compact = flags >> 2 & 1
     k = r.u8()

@@ -45,9 +45,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto back = hmc::detail::read_recon(again, points.size());
   FUZZ_CHECK(back.multipliers == rp.multipliers && back.vertex_class == rp.vertex_class && back.compact == rp.compact &&
                  back.toggles == rp.toggles && back.toggle_ranks == rp.toggle_ranks && back.drops == rp.drops && back.border == rp.border && back.filters == rp.filters &&
-                 back.peel == rp.peel && back.repair == rp.repair && back.scale_rank == rp.scale_rank,
+                 back.peel == rp.peel && back.repair == rp.repair && back.scale_rank == rp.scale_rank &&
+                 back.border_delta == rp.border_delta,
              "RCON does not survive a write and a read");
 
+  // A lone level inherits the empty border (flag bit 3).
+  hmc::detail::resolve_border(rp, {});
   const auto dt = hmc::detail::delaunay(points);
   hmc::detail::Reconstruction rec;
   try {

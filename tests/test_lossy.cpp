@@ -342,29 +342,6 @@ TEST_CASE("lossy surfaces are rebuilt as closed surfaces") {
 
 namespace {
 
-// An open surface: a height field over a jittered n x n grid of a square,
-// turned about z so that the border's points are not in canonical order
-// along it, and wavy enough that the Delaunay tetrahedralization is not
-// trivial. Its border is the square's outline.
-Mesh height_field(int n, double amplitude) {
-  Mesh m;
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> jitter(-0.25, 0.25);
-  const double c = std::cos(0.4), s = std::sin(0.4);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const double u = (i + jitter(rng)) / (n - 1), v = (j + jitter(rng)) / (n - 1);
-      m.points.push_back({c * u - s * v, s * u + c * v, amplitude * std::sin(5.0 * u + 1.0) * std::cos(4.0 * v - 0.5)});
-    }
-  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * n + j); };
-  for (int i = 0; i + 1 < n; ++i)
-    for (int j = 0; j + 1 < n; ++j) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return m;
-}
-
 // Edges of a triangle list with their face counts.
 std::map<std::pair<std::uint32_t, std::uint32_t>, int> edge_counts(const std::vector<Triangle>& tris) {
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
@@ -421,7 +398,7 @@ double grid_diagonal(const std::vector<Vec3>& pts) {
 // point order, not the level's canonical order, so RCON's gap coding wrapped
 // around and the decoder rejected the stream ("border index out of range").
 TEST_CASE("lossy open surfaces: the decoder accepts the stream and rebuilds the encoder's levels") {
-  const Mesh field = height_field(36, 0.15);
+  const Mesh field = samples::height_field(36, 0.15);
   for (int bits : {3, 5}) {
     for (int levels : {2, 3}) {
       CAPTURE(bits);

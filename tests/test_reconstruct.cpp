@@ -308,7 +308,7 @@ TEST_CASE("RCON syntax errors are bad_layer, misplaced RCON is bad_chunk") {
   CHECK(with_recon(ok) == Status::ok);
   {
     Chunks c = base;
-    c.list[r].second[0] = 8;  // reserved flag
+    c.list[r].second[0] = 16;  // reserved flag
     CHECK(status(c) == Status::bad_layer);
     c = base;
     c.list[r].second[1] = 0;  // scale rank 0
@@ -598,4 +598,77 @@ TEST_CASE("compact RCON: classes in groups survive a round trip and their errors
     bytes.push_back(0x00);  // a byte after the bit stream
     CHECK(payload_status(bytes, 3) == Status::bad_layer);
   }
+}
+
+TEST_CASE("an open surface's finer levels inherit the coarser level's border (RCON flag bit 3)") {
+  EncodeOptions o;
+  o.levels = 3;
+  o.bits = 10;
+  const auto e = encode(samples::height_field(30, 0.15), o).value();
+  REQUIRE(e.levels.size() == 3);
+  Chunks c = chunks_of(e.bytes);
+  std::vector<std::size_t> at;  // the RCON chunks, coarsest level first
+  for (std::size_t i = 0; i < c.list.size(); ++i)
+    if (c.list[i].first == kRecon) at.push_back(i);
+  REQUIRE(at.size() == 3);
+
+  // Resolve the borders here, on coordinates: each level's set is the
+  // coarser level's set with the listed points toggled.
+  std::set<GridPoint> inherited;
+  std::size_t coded_entries = 0, resolved_entries = 0, delta_levels = 0;
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    const auto& points = e.levels[k].points;
+    ReconParams p = read_payload(c.list[at[k]].second, points.size());
+    std::set<GridPoint> border = p.border_delta ? inherited : std::set<GridPoint>{};
+    for (std::uint32_t i : p.border)
+      if (!border.insert(points[i]).second) border.erase(points[i]);
+    if (k == 0) CHECK_FALSE(p.border_delta);  // nothing to inherit yet
+    delta_levels += p.border_delta;
+    coded_entries += p.border.size();
+    // The same level with its border written out in full (the form of 0.8).
+    p.border_delta = false;
+    p.border.clear();
+    for (std::uint32_t i = 0; i < points.size(); ++i)
+      if (border.count(points[i])) p.border.push_back(i);
+    resolved_entries += p.border.size();
+    CHECK(!p.border.empty());  // the square's outline survives into every level
+    c.list[at[k]].second = write_recon(p);
+    inherited = border;
+  }
+  // The finer levels list only the change: far fewer entries than the sets.
+  CHECK(delta_levels == 2);
+  CHECK(coded_entries * 2 < resolved_entries);
+  CHECK(c.bytes().size() > e.bytes.size());
+
+  // Both forms decode to the levels the encoder planned.
+  const auto d = decode(e.bytes.data(), e.bytes.size()).value();
+  const auto full = c.bytes();
+  const auto d_full = decode(full.data(), full.size()).value();
+  REQUIRE(d.levels.size() == 3);
+  REQUIRE(d_full.levels.size() == 3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    CAPTURE(k);
+    CHECK(d.levels[k].triangles == e.levels[k].triangles);
+    CHECK(d_full.levels[k].triangles == e.levels[k].triangles);
+  }
+
+  // A coarsest level that sets the flag inherits the empty set.
+  Chunks first = chunks_of(e.bytes);
+  ReconParams p0 = read_payload(first.list[at[0]].second, e.levels[0].points.size());
+  p0.border_delta = true;
+  first.list[at[0]].second = write_recon(p0);
+  const auto b0 = first.bytes();
+  const auto d0 = decode(b0.data(), b0.size()).value();
+  CHECK(d0.levels[0].triangles == e.levels[0].triangles);
+
+  // Inheriting the wrong set changes the level: flag bit 3 on a finer level
+  // whose list is the full set toggles every inherited point off.
+  Chunks wrong = chunks_of(full);
+  ReconParams p2 = read_payload(wrong.list[at[2]].second, e.levels[2].points.size());
+  p2.border_delta = true;
+  wrong.list[at[2]].second = write_recon(p2);
+  const auto bw = wrong.bytes();
+  const auto dw = decode(bw.data(), bw.size()).value();
+  CHECK(dw.levels[1].triangles == e.levels[1].triangles);
+  CHECK(dw.levels[2].triangles != e.levels[2].triangles);
 }

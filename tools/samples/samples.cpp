@@ -52,6 +52,25 @@ Mesh torus(int nu, int nv, double major, double minor) {
   return m;
 }
 
+Mesh height_field(int n, double amplitude) {
+  Mesh m;
+  std::mt19937 rng(7);  // the tests' figures depend on this sequence
+  std::uniform_real_distribution<double> jitter(-0.25, 0.25);
+  const double c = std::cos(0.4), s = std::sin(0.4);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double u = (i + jitter(rng)) / (n - 1), v = (j + jitter(rng)) / (n - 1);
+      m.points.push_back({c * u - s * v, s * u + c * v, amplitude * std::sin(5.0 * u + 1.0) * std::cos(4.0 * v - 0.5)});
+    }
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * n + j); };
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < n; ++j) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
 Mesh random_ball(std::size_t n, std::uint64_t seed, double radius) {
   Rng rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -19,6 +19,11 @@ using Rng = std::mt19937_64;
 Mesh uv_sphere(int rings, int segments, double radius = 1.0);
 /// Triangulated torus (closed, genus 1) on a `nu` x `nv` grid.
 Mesh torus(int nu, int nv, double major = 1.0, double minor = 0.35);
+/// An open surface: a height field z = amplitude·sin(5u + 1)·cos(4v − 0.5)
+/// over a jittered n x n grid of the unit square, turned by 0.4 rad about z
+/// (so its border points are not in canonical order along the outline).
+/// Its border is the square's outline.
+Mesh height_field(int n, double amplitude);
 /// Points uniformly distributed inside a ball (no connectivity).
 Mesh random_ball(std::size_t n, std::uint64_t seed, double radius = 1.0);
 /// A ball sampled on concentric shells, outermost first: counts[0] points

@@ -149,6 +149,9 @@ struct ChunkDecoder::State {
   // inserting only the added points. Counted in `memory` while kept.
   std::optional<Tetrahedralization> previous_dt;
   std::uint64_t previous_dt_bytes = 0;
+  // The last reconstructed level's border (resolved; indices of its points),
+  // which the next level's RCON may inherit (flag bit 3).
+  std::vector<std::uint32_t> previous_border;
 
   // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
   // The kept tetrahedralization only saves time: it goes first, so that no
@@ -231,8 +234,16 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
     }
     case ChunkWalker::Action::recon: {
       if (!pending) break;  // a level after the requested one
-      const ReconParams params = read_recon(c, pending->points.size());
+      ReconParams params = read_recon(c, pending->points.size());
       if (options.reconstruct) {
+        // Levels are reconstructed coarsest first, so the last one is the
+        // coarser level, whose points are a subset of these (none before
+        // the first: it inherits the empty set).
+        if (params.border_delta)
+          resolve_border(params, out.levels.empty() ? std::vector<std::uint32_t>{}
+                                                    : inherited_border(pending->points, out.levels.back().points,
+                                                                       s_->previous_border));
+        s_->previous_border = params.border;
         const std::uint64_t n = pending->points.size();
         const std::string what = "the reconstruction of level " + std::to_string(pending->lod) + " (" +
                                  std::to_string(n) + " points)";

@@ -217,6 +217,20 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   plan.report.rule_mismatches = tr.mismatches_before_toggles;
 }
 
+// The RCON payload of a level: its border as a change to the coarser
+// level's (flag bit 3) when that is shorter, as with an open surface whose
+// border points mostly survive into the coarser levels.
+std::vector<std::uint8_t> recon_payload(const ReconParams& params, const std::vector<GridPoint>& points,
+                                        const LevelPlan* coarser) {
+  auto full = write_recon(params);
+  if (!coarser) return full;
+  ReconParams coded = params;
+  coded.border = border_change(params.border, inherited_border(points, coarser->points, coarser->params.border));
+  coded.border_delta = true;
+  auto delta = write_recon(coded);
+  return delta.size() < full.size() ? delta : full;
+}
+
 // Candidate anchors per point of a lossy layer (its nearest coarse points).
 constexpr int kVqAnchors = 4;
 constexpr int kMaxVqBits = 10;
@@ -492,7 +506,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     level.layer_bytes = w.size() - before;
     if (rep.kind != Kind::points) {
       const std::size_t side_start = w.size();
-      w.chunk(kRecon, write_recon(plan.params));
+      w.chunk(kRecon, recon_payload(plan.params, plan.points, i + 1 < plans.size() ? &plans[i + 1] : nullptr));
       level.side_bytes = w.size() - side_start;
     }
     level.stream_bytes = w.size();

@@ -273,7 +273,7 @@ std::array<std::vector<std::uint32_t>, kToggleContexts> read_toggle_ranks(BitRea
 
 std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   ByteWriter w;
-  w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0)));
+  w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0) | (p.border_delta ? 8 : 0)));
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
@@ -312,10 +312,11 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
-  if (flags > 7) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
+  if (flags > 15) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
   p.peel = flags & 1;
   p.repair = (flags & 2) != 0;
   p.compact = (flags & 4) != 0;
+  p.border_delta = (flags & 8) != 0;
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");

@@ -2,6 +2,7 @@
 #include "reconstruct/reconstruct.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <string>
 
 #include "util/error.hpp"
@@ -797,9 +798,38 @@ void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vect
   for (std::uint32_t t : flip) inside[t] ^= 1;
 }
 
+std::vector<std::uint32_t> inherited_border(const std::vector<GridPoint>& points, const std::vector<GridPoint>& coarse,
+                                            const std::vector<std::uint32_t>& coarse_border) {
+  std::vector<std::uint32_t> out;
+  out.reserve(coarse_border.size());
+  auto from = points.begin();  // both lists ascend, so each search starts at the last hit
+  for (std::uint32_t i : coarse_border) {
+    if (i >= coarse.size()) fail(Status::internal_error, "inherited border index out of range");
+    from = std::lower_bound(from, points.end(), coarse[i]);
+    if (from == points.end() || *from != coarse[i])
+      fail(Status::internal_error, "a coarser level's border point is missing from the finer level");
+    out.push_back(static_cast<std::uint32_t>(from - points.begin()));
+  }
+  return out;
+}
+
+std::vector<std::uint32_t> border_change(const std::vector<std::uint32_t>& a, const std::vector<std::uint32_t>& b) {
+  std::vector<std::uint32_t> out;
+  out.reserve(a.size() + b.size());
+  std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+  return out;
+}
+
+void resolve_border(ReconParams& p, const std::vector<std::uint32_t>& inherited) {
+  if (!p.border_delta) return;
+  p.border = border_change(p.border, inherited);
+  p.border_delta = false;
+}
+
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
                            const ReconParams& p) {
   if (kind == Kind::points) return {};
+  if (p.border_delta) fail(Status::internal_error, "reconstruct: the border list is not resolved");
   const auto scale = local_scale(points, dt, p.scale_rank);
   auto inside = rule_labels(points, dt, scale, p);
   if (p.repair) repair_labels(dt, kind, inside);

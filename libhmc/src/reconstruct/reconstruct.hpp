@@ -40,8 +40,14 @@ struct ReconParams {
   /// edge ratio, density, lone triangle (1 = on), neighbour circle radius
   /// ratio, neighbour min/max edge ratio.
   std::array<std::uint32_t, 6> filters{};
-  /// Border vertices of an open surface (sorted, distinct).
+  /// Border vertices of an open surface (sorted, distinct). As read from
+  /// or written to a stream with `border_delta`, the list is the change to
+  /// the inherited border instead (see resolve_border()).
   std::vector<std::uint32_t> border;
+  /// RCON flag bit 3 (spec 0.9): `border` lists the points whose membership
+  /// differs from the coarser level's border (its points, all of which are
+  /// in this level), i.e. the symmetric difference of the two sets.
+  bool border_delta = false;
   /// Compact coding (RCON flag bit 2, spec 0.5): alpha classes in groups
   /// and toggles as ranks within their context. Without it (streams up to
   /// spec 0.4), toggles are tetrahedron indices.
@@ -120,7 +126,22 @@ void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vect
 Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vector<std::uint8_t>& inside,
                        const ReconParams& p);
 
-/// The whole normative rule.
+/// The border the coarser level passes on (spec 10, flag bit 3): the
+/// indices in `points` (canonical order) of `coarse[i]` for i in
+/// `coarse_border`, where `coarse` is the coarser level's point set, a
+/// subset of `points`, and `coarse_border` its resolved border list.
+std::vector<std::uint32_t> inherited_border(const std::vector<GridPoint>& points, const std::vector<GridPoint>& coarse,
+                                            const std::vector<std::uint32_t>& coarse_border);
+
+/// Symmetric difference of two sorted lists of distinct indices: the coded
+/// list from the border set and the inherited one, or the set back from the
+/// coded list.
+std::vector<std::uint32_t> border_change(const std::vector<std::uint32_t>& a, const std::vector<std::uint32_t>& b);
+
+/// Turns a border read with `border_delta` into the set (clearing the flag).
+void resolve_border(ReconParams& p, const std::vector<std::uint32_t>& inherited);
+
+/// The whole normative rule (on a resolved border).
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
                            const ReconParams& p);
 
