@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x09"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x0a"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -193,6 +193,54 @@ def canonical_codes(lengths):
     return codes
 
 
+# The code-length table form of the hand-built streams being written: 0 the
+# 4-bit form, 1 the delta form (HEAD flag bit 0); see delta_tables().
+TABLE_FORM = [0]
+
+
+class delta_tables:
+    """Within `with delta_tables():`, tables are written in the delta form."""
+
+    def __enter__(self):
+        TABLE_FORM.append(1)
+
+    def __exit__(self, *exc):
+        TABLE_FORM.pop()
+
+
+def write_delta_lengths(bw, alphabet, lengths):
+    """§7.1 delta form: 00 same, 01 zero run, 100 +1, 101 -1, 1100 +2,
+    1101 -2, 1110 end, 1111 s ue (far); the first length relative to 3."""
+    prev = 3
+    s = 0
+    while s < alphabet:
+        l = lengths.get(s, 0)
+        if l:
+            d = l - prev
+            prev = l
+            s += 1
+            if d == 0:
+                bw.put(0b00, 2)
+            elif d in (1, -1):
+                bw.put(0b100 if d > 0 else 0b101, 3)
+            elif d in (2, -2):
+                bw.put(0b1100 if d > 0 else 0b1101, 4)
+            else:
+                bw.put(0b1111, 4)
+                bw.put(1 if d < 0 else 0, 1)
+                bw.ue(abs(d) - 3)
+            continue
+        run = 0
+        while s + run < alphabet and not lengths.get(s + run, 0):
+            run += 1
+        if s + run == alphabet and run > 1:
+            bw.put(0b1110, 4)  # end: cheaper than a run of 2 or more
+            return
+        bw.put(0b01, 2)
+        bw.ue(run - 1)
+        s += run
+
+
 def write_table(bw, alphabet, lengths=None, single=None):
     """§7.1. lengths: {symbol: length}; or single: the one symbol."""
     if single is not None:
@@ -200,6 +248,9 @@ def write_table(bw, alphabet, lengths=None, single=None):
         bw.put(single, max(1, (alphabet - 1).bit_length()))
         return
     bw.put(0, 1)
+    if TABLE_FORM[-1]:
+        write_delta_lengths(bw, alphabet, lengths)
+        return
     s = 0
     while s < alphabet:
         l = lengths.get(s, 0)
@@ -939,9 +990,10 @@ def sphere_pts(n, q, seed):
 
 
 def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), step=1.0, info=None):
-    """levels: point lists, coarsest first, each containing the previous."""
+    """levels: point lists, coarsest first, each containing the previous.
+    HEAD flag bit 0 follows the table form being written (delta_tables)."""
     counts = [len(l) for l in levels]
-    ch = [["HEAD", head_payload(kind, counts)], ["SQNT", sqnt_payload(q, origin, step)]]
+    ch = [["HEAD", head_payload(kind, counts, TABLE_FORM[-1])], ["SQNT", sqnt_payload(q, origin, step)]]
     if info:
         ch.append(["info", info])
     ch.append(["BASE", base_payload(levels[0], q)])
@@ -1052,6 +1104,22 @@ def hb_rcon_border_inherit():
     rc1 = rcon_payload(n1, flags=1, multipliers=(1500,), border=b1)
     rc2 = rcon_payload(n2, flags=1 | 8, multipliers=(1500,), border=tuple(sorted(removed + added)))
     return hand_stream(1, q, lv, [(4, 1, True), (4, 2, True)], rcons=[rc0, rc1, rc2])
+
+
+def hb_delta_tables():
+    # Every table in the delta form (HEAD flag bit 0): BASE coder 0, REFN
+    # tables over 1 to 4 classes, RCON class tables (grouped and not).
+    q = 7
+    pts = sphere_pts(300, q, 61)
+    lv = nested(pts, [60, 140, 300], 62)
+    n0, n1, n2 = len(lv[0]), len(lv[1]), len(lv[2])
+    r = random.Random(63)
+    with delta_tables():
+        rc0 = rcon_payload(n0, flags=1, multipliers=(700, 1500, 4000), classes=[r.choice((0, 1, 1, 2)) for _ in range(n0)])
+        rc1 = rcon_payload(n1, flags=1, multipliers=(900, 2000), compact=True, group=4,
+                           classes=[1 if i % 5 == 0 else 0 for i in range(n1)], toggles={1: (2,), 4: (0, 3)})
+        rc2 = rcon_payload(n2, flags=3, multipliers=(1200,), compact=True, toggles={0: (1, 5)})
+        return hand_stream(1, q, lv, [(4, 4, True), (1, 3, False)], rcons=[rc0, rc1, rc2])
 
 
 def hb_base_ranked_sphere():
@@ -1210,6 +1278,8 @@ HANDBUILT = [
      "hand-built layers on a lattice: many equidistant neighbours and equal keys", sec("refn")),
     ("rcon-handbuilt-surface", hb_rcon_surface, F,
      "hand-written RCON: peel and repair off and on, filters 0, 2, 3 then all six, K = 3 and 2 (class bit streams), border, toggle and drop lists; origin and step not the encoder's", sec("rcon", "recon", "sqnt")),
+    ("tables-delta-handbuilt", hb_delta_tables, F,
+     "HEAD flag bit 0: every code-length table in the delta form (BASE, REFN with 4 and 3 classes and unshared tables, RCON class tables plain and grouped)", sec("head", "huff", "base", "refn", "rcon", "recon")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
      "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
@@ -1249,8 +1319,8 @@ def base_with_table(table_writer):
     return b"\x00" + bits_payload(table_writer)
 
 
-def stream_q1(base, counts=(1,), kind=0, rcon=None, q=1):
-    ch = [["HEAD", head_payload(kind, list(counts))], ["SQNT", sqnt_payload(q)], ["BASE", base]]
+def stream_q1(base, counts=(1,), kind=0, rcon=None, q=1, flags=0):
+    ch = [["HEAD", head_payload(kind, list(counts), flags)], ["SQNT", sqnt_payload(q)], ["BASE", base]]
     if rcon is not None:
         ch.append(["RCON", rcon])
     ch.append(["HEND", b""])
@@ -1378,8 +1448,8 @@ NEGATIVE = [
     # HEAD / SQNT / VQTB
     ("neg-head-kind", "bad_header", P, "kind 3", ["4", "13"],
      lambda: stream_q1(base_payload([(0, 0, 0)], 1), kind=3)),
-    ("neg-head-flags", "bad_header", P, "HEAD flags 1 (reserved)", ["4", "13"],
-     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "00010101"}])),
+    ("neg-head-flags", "bad_header", P, "HEAD flags 2 (a reserved bit)", ["4", "13"],
+     neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "00020101"}])),
     ("neg-head-levels-0", "bad_header", P, "level_count 0", ["4", "13"],
      neg_from("points-one", [{"op": "replace_payload", "at": 0, "payload": "000000"}])),
     ("neg-head-levels-65", "bad_header", P, "level_count 65", ["4", "13"],
@@ -1420,6 +1490,16 @@ NEGATIVE = [
     ("neg-huffman-single-out-of-range", "bad_huffman_table", P, "REFN single-symbol table with symbol 255 of 255", ["7.1", "8A", "13"],
      lambda: stream_q1_refn(refn_single(255))),
     ("neg-huffman-rcon-classes", "bad_huffman_table", P, "RCON class table (K = 2) with one symbol of length 1 only", ["7.1", "10", "13"], None),
+    ("neg-huffman-delta-length-0", "bad_huffman_table", P, "delta-form BASE table: 3 - 2 - 1 gives a length 0", ["4", "7.1", "13"],
+     lambda: stream_q1(base_with_table(lambda bw: (bw.put(0, 1), bw.put(0b1101, 4), bw.put(0b101, 3))), flags=1)),
+    ("neg-huffman-delta-length-16", "bad_huffman_table", P, "delta-form BASE table: a far token +13 gives a length 16", ["4", "7.1", "13"],
+     lambda: stream_q1(base_with_table(lambda bw: (bw.put(0, 1), bw.put(0b1111, 4), bw.put(0, 1), bw.ue(10))), flags=1)),
+    ("neg-huffman-delta-incomplete", "bad_huffman_table", P, "delta-form BASE table: lengths 1, 2, then the end token (Kraft sum 3/4)", ["4", "7.1", "13"],
+     lambda: stream_q1(base_with_table(lambda bw: (bw.put(0, 1), bw.put(0b01, 2), bw.ue(0), bw.put(0b1101, 4), bw.put(0b100, 3), bw.put(0b1110, 4))), flags=1)),
+    ("neg-huffman-delta-run-past", "bad_huffman_table", P, "delta-form BASE table: a zero run of 255 from symbol 2 of 256", ["4", "7.1", "13"],
+     lambda: stream_q1(base_with_table(lambda bw: (bw.put(0, 1), bw.put(0b1101, 4), bw.put(0b00, 2), bw.put(0b01, 2), bw.ue(254))), flags=1)),
+    ("neg-huffman-nibbles-as-deltas", "bad_huffman_table", P, "HEAD flag bit 0 set over a BASE table in the 4-bit form (lengths 1, 1 read as tokens)", ["4", "7.1", "13"],
+     lambda: stream_q1(base_with_table(lambda bw: write_table(bw, 256, lengths={0: 1, 1: 1})), flags=1)),
     # layers
     ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
     ("neg-base-coder", "bad_layer", P, "BASE coder 2", ["8", "13"],

@@ -178,8 +178,44 @@ class Code:
         raise DecodeError(cls, "no code matches (impossible for a complete code)")
 
 
-def read_code(br, alphabet):
-    """§7.1: a code-length table for an alphabet of `alphabet` symbols. An
+def read_delta_lengths(br, alphabet):
+    """§7.1, delta form: tokens 00 same, 01 zero run, 100 +1, 101 -1,
+    1100 +2, 1101 -2, 1110 end, 1111 s ue (far: -(ue + 3) if s else
+    ue + 3); the first length is relative to 3."""
+    lengths = [0] * alphabet
+    s = 0
+    prev = 3
+    while s < alphabet:
+        if br.bits(1) == 0:
+            if br.bits(1) == 1:  # zero run
+                run = br.ue() + 1
+                if s + run > alphabet:
+                    raise DecodeError("bad_huffman_table", "zero run past the alphabet (%d + %d > %d)" % (s, run, alphabet))
+                s += run
+                continue
+            delta = 0
+        elif br.bits(1) == 0:
+            delta = -1 if br.bits(1) else 1
+        elif br.bits(1) == 0:
+            delta = -2 if br.bits(1) else 2
+        elif br.bits(1) == 0:  # end: the rest are zero
+            break
+        else:
+            down = br.bits(1)
+            m = br.ue() + 3
+            delta = -m if down else m
+        length = prev + delta
+        if not 1 <= length <= 15:
+            raise DecodeError("bad_huffman_table", "length %d of symbol %d outside 1..15" % (length, s))
+        lengths[s] = length
+        prev = length
+        s += 1
+    return lengths
+
+
+def read_code(br, alphabet, form=1):
+    """§7.1: a code-length table for an alphabet of `alphabet` symbols, in
+    the 4-bit form (form 0) or the delta form (form 1, HEAD flag bit 0). An
     overrun is an error of the bit stream's class; every other defect is
     bad_huffman_table."""
     if br.bits(1) == 1:
@@ -188,8 +224,8 @@ def read_code(br, alphabet):
         if sym >= alphabet:
             raise DecodeError("bad_huffman_table", "single symbol %d >= alphabet size %d" % (sym, alphabet))
         return Code(single=sym)
-    lengths = [0] * alphabet
-    s = 0
+    lengths = read_delta_lengths(br, alphabet) if form else [0] * alphabet
+    s = alphabet if form else 0
     while s < alphabet:
         v = br.bits(4)
         if v:
@@ -219,7 +255,7 @@ def morton_children(node, d, q):
     return [(c, (2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1))) for c in range(8)]
 
 
-def decode_base(payload, q, n):
+def decode_base(payload, q, n, form=1):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
     if payload[0] not in (0, 1):
@@ -231,7 +267,7 @@ def decode_base(payload, q, n):
     ranked, tables = [], []
     for _ in range(q):
         ranked.append(coder == 1 and br.bits(1) == 1)
-        tables.append([read_code(br, 255) for _ in range(classes)] if ranked[-1] else [read_code(br, 256)])
+        tables.append([read_code(br, 255, form) for _ in range(classes)] if ranked[-1] else [read_code(br, 256, form)])
         if ranked[-1] and any(t.single is not None for t in tables[-1]):
             # §8.2: every ranked node costs a bit
             raise DecodeError("bad_layer", "BASE: a one-symbol code at ranked depth %d" % (len(tables) - 1))
@@ -399,13 +435,13 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False):
     return (pi, min(above, below)) if want_split else pi
 
 
-def decode_refn(payload, q, coarse, n, codebook=None):
+def decode_refn(payload, q, coarse, n, codebook=None, form=1):
     """Returns the added points A (list). coarse: C in canonical order;
     codebook: the VQTB entries, or None when the stream has no VQTB."""
     if not payload:
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
-        return decode_vq(payload, q, coarse, n, codebook)
+        return decode_vq(payload, q, coarse, n, codebook, form)
     if payload[0] != 0:
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     br = BitReader(payload, 1, "bad_layer", "REFN")
@@ -415,7 +451,7 @@ def decode_refn(payload, q, coarse, n, codebook=None):
     for d in range(q):
         for j in range(classes):
             if br.bits(1) == 1:
-                table[d][j] = read_code(br, 255)
+                table[d][j] = read_code(br, 255, form)
             elif d > 0:
                 table[d][j] = table[d - 1][j]
     # Occupied nodes of C per depth.
@@ -469,7 +505,7 @@ def decode_refn(payload, q, coarse, n, codebook=None):
 # ---------------------------------------------------------------- §8A.2 anchored vector quantizer
 
 
-def decode_vq(payload, q, coarse, n, codebook):
+def decode_vq(payload, q, coarse, n, codebook, form=1):
     """§8A.2: coder 1. Returns the added points A."""
     if codebook is None:
         raise DecodeError("bad_layer", "REFN: coder 1 needs a VQTB chunk, and the stream has none")
@@ -477,9 +513,9 @@ def decode_vq(payload, q, coarse, n, codebook):
     s = br.ue()
     if s > 2**21 - 1:
         raise DecodeError("bad_layer", "REFN: residual step %d above 2^21 - 1" % s)
-    anchor_table = read_code(br, 64)
-    index_table = read_code(br, len(codebook))
-    residual_tables = [read_code(br, 64) for _ in range(3)] if s > 0 else None
+    anchor_table = read_code(br, 64, form)
+    index_table = read_code(br, len(codebook), form)
+    residual_tables = [read_code(br, 64, form) for _ in range(3)] if s > 0 else None
 
     def escaped(t):
         e = t.decode(br, "bad_layer")
@@ -517,7 +553,7 @@ def decode_vq(payload, q, coarse, n, codebook):
 # ---------------------------------------------------------------- §10 RCON
 
 
-def parse_rcon(payload, n):
+def parse_rcon(payload, n, form=1):
     r = ByteReader(payload, "bad_layer", "RCON")
     flags = r.u8()
     if flags & 0xF0:  # bit 3 (inherit_border) changes only what the border list means
@@ -558,7 +594,7 @@ def parse_rcon(payload, n):
             A = K ** G
             if A > 4096:
                 raise DecodeError("bad_layer", "RCON: %d classes in groups of %d make %d > 4096 symbols" % (K, G, A))
-            code = read_code(br, A)
+            code = read_code(br, A, form)
             for b in range((n + G - 1) // G):
                 s = code.decode(br, "bad_layer")
                 for i in range(G):
@@ -568,7 +604,7 @@ def parse_rcon(payload, n):
                         raise DecodeError("bad_layer", "RCON: a class group gives a class to a point beyond the last")
                     s //= K
         else:
-            code = read_code(br, K)
+            code = read_code(br, K, form)
             for _ in range(n):
                 counts[code.decode(br, "bad_layer")] += 1
         r.pos = br.pad()
@@ -692,8 +728,9 @@ def decode(data):
             kind = r.u8()
             if kind not in KIND_NAMES:
                 r.fail("kind %d" % kind)
-            if r.u8() != 0:
-                r.fail("reserved flags not 0")
+            flags = r.u8()
+            if flags & 0xFE:
+                r.fail("reserved flag bits set (flags = %d)" % flags)
             L = r.varint()
             if not 1 <= L <= 64:
                 r.fail("level_count %d" % L)
@@ -704,7 +741,7 @@ def decode(data):
                     r.fail("level_points not strictly increasing from 1")
                 pts.append(v)
             r.end()
-            st.update(kind=kind, declared=pts, L=L)
+            st.update(kind=kind, declared=pts, L=L, tables=flags & 1)
         elif t == "SQNT":
             need("SQNT" not in seen, "second SQNT")
             need("BASE" not in seen and "VQTB" not in seen, "SQNT after VQTB or BASE")
@@ -746,7 +783,7 @@ def decode(data):
         elif t == "BASE":
             need("SQNT" in seen, "BASE before SQNT")
             need("BASE" not in seen, "second BASE")
-            current = decode_base(payload, st["q"], st["declared"][0])
+            current = decode_base(payload, st["q"], st["declared"][0], st["tables"])
             layers = 1
             pending_rcon = st["kind"] != 0
             if not pending_rcon:
@@ -755,7 +792,7 @@ def decode(data):
             need("BASE" in seen, "REFN before BASE")
             need(layers < st["L"], "more layer chunks than the %d declared levels" % st["L"])
             n = st["declared"][layers] - st["declared"][layers - 1]
-            added = decode_refn(payload, st["q"], current, n, st.get("codebook"))
+            added = decode_refn(payload, st["q"], current, n, st.get("codebook"), st["tables"])
             current = sorted(current + added)
             layers += 1
             pending_rcon = st["kind"] != 0
@@ -764,7 +801,7 @@ def decode(data):
         elif t == "RCON":
             need(st["kind"] != 0, "RCON in a stream of kind points")
             need(pending_rcon, "RCON without a layer chunk before it")
-            parse_rcon(payload, len(current))
+            parse_rcon(payload, len(current), st["tables"])
             pending_rcon = False
             levels.append((st["L"] - layers, current))
         elif t == "HEND":

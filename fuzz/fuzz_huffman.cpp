@@ -2,7 +2,8 @@
 // Fuzz target: canonical Huffman code-length tables (HuffmanCode::read) on
 // arbitrary bits, then symbol decoding until the bits run out.
 //
-// Input: u16 alphabet size minus one (1 ... 65536), then the bit stream.
+// Input: u8 table form (bit 0: 1 the delta form, 0 the 4-bit form of spec
+// 7.1), u16 alphabet size minus one (1 ... 65536), then the bit stream.
 // Checks: only bad_huffman_table / bad_layer are raised; an accepted table
 // writes back to a table that reads to the same lengths; every decoded
 // symbol is in the alphabet; re-encoding the decoded symbols gives exactly
@@ -28,6 +29,7 @@ bool expected_error(Status s) { return s == Status::bad_huffman_table || s == St
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   hmc_fuzz::Params params(data, size);
+  const auto form = params.u8() & 1 ? hmc::detail::TableForm::deltas : hmc::detail::TableForm::nibbles;
   const std::uint32_t alphabet = params.u16() + 1;
   const std::uint8_t* bits = params.rest();
   const std::size_t nbytes = params.rest_size();
@@ -36,7 +38,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   BitReader in(bits, nbytes, "fuzz");
   HuffmanCode code;
   try {
-    code = HuffmanCode::read(in, alphabet, "fuzz table");
+    code = HuffmanCode::read(in, alphabet, "fuzz table", form);
   } catch (const hmc::detail::StreamError& e) {
     FUZZ_CHECK(expected_error(e.error().status), "table read raised %s: %s", hmc::status_name(e.error().status),
                e.what());
@@ -64,12 +66,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // The table writes back to one that reads to the same code.
   {
     BitWriter w;
-    code.write(w);
+    code.write(w, form);
     const std::vector<std::uint8_t> table = w.finish();
     BitReader again(table.data(), table.size(), "fuzz rewrite");
     HuffmanCode back;
     try {
-      back = HuffmanCode::read(again, alphabet, "fuzz rewritten table");
+      back = HuffmanCode::read(again, alphabet, "fuzz rewritten table", form);
     } catch (const hmc::detail::StreamError& e) {
       FUZZ_CHECK(false, "a written table does not read back: %s", e.what());
     }

@@ -208,13 +208,13 @@ put("base_layer", "single-chain-q21", base_input(21, 1, single_symbol_octree(21,
 put("base_layer", "empty-q1", base_input(1, 1, b""))
 put("base_layer", "coder1-empty-q1", base_input(1, 1, b"\x01"))
 
-# --- huffman: alphabet - 1 (u16), then a table and symbols ---------------
-def huff_input(alphabet, bits):
-    return struct.pack("<H", alphabet - 1) + bits
+# --- huffman: table form (u8), alphabet - 1 (u16), then a table and symbols
+def huff_input(alphabet, bits, form=0):
+    return struct.pack("<BH", form, alphabet - 1) + bits
 
 for name in ("ball40-q12-noinfo", "torus500-q12-noinfo", "lattice64-q2-noinfo"):
     base = dict(chunks(streams[name]))["BASE"][1:]
-    put("huffman", name, huff_input(256, base[:512]))
+    put("huffman", name, huff_input(256, base[:512], 1))  # the encoder writes delta tables
 b = Bits(); b.put(1, 1); b.put(5, 3)
 put("huffman", "single-a8", huff_input(8, b.bytes()))
 b = Bits(); b.put(1, 1); b.put(9, 4)
@@ -236,6 +236,15 @@ b.put(0xFFFF, 16); b.put(0xFFFF, 16); b.put(0b1110, 4)
 put("huffman", "long-codes", huff_input(16, b.bytes()))
 b = Bits(); b.put(0, 1); b.put(0, 4); b.put(0, 31); b.put(1, 1)
 put("huffman", "ue-31-zeros", huff_input(65536, b.bytes()))
+# Delta form: lengths 2, 1, 3, 3 (3-1, -1, +2, same), then the spec example's symbols.
+b = Bits(); b.put(0, 1); b.put(0b101, 3); b.put(0b101, 3); b.put(0b1100, 4); b.put(0b00, 2)
+for code, n in ((0b10, 2), (0b0, 1), (0b110, 3), (0b111, 3)):
+    b.put(code, n)
+put("huffman", "delta-spec-example", huff_input(4, b.bytes(), 1))
+# Delta form: far tokens (+12, -13), a zero run and the end token.
+b = Bits(); b.put(0, 1); b.put(0b1111, 4); b.put(0, 1); b.ue(9); b.put(0b01, 2); b.ue(4)
+b.put(0b1111, 4); b.put(1, 1); b.ue(10); b.put(0b1110, 4)
+put("huffman", "delta-far-end", huff_input(40, b.bytes(), 1))
 
 # --- refine_layer, vq_layer, recon: cut from the small streams -----------
 def dump_points(path):

@@ -279,7 +279,7 @@ TEST_CASE("hand-made malformed streams get their error class") {
   }
   SUBCASE("reserved header flags, unknown kind, trailing header bytes") {
     Chunks c = base;
-    c.list[0].second[1] = 1;
+    c.list[0].second[1] = 2;  // bit 0 is the table form; the rest are reserved
     CHECK(decode_status(c.bytes()) == Status::bad_header);
     c = base;
     c.list[0].second[0] = 3;
@@ -291,7 +291,7 @@ TEST_CASE("hand-made malformed streams get their error class") {
   SUBCASE("point counts: zero levels, zero points, over the grid, over the limit") {
     auto head = [](std::vector<std::uint64_t> counts, std::uint64_t levels) {
       ByteWriter w;
-      w.u8(0), w.u8(0), w.varint(levels);
+      w.u8(0), w.u8(1), w.varint(levels);
       for (auto n : counts) w.varint(n);
       return w.data();
     };
@@ -390,7 +390,7 @@ TEST_CASE("hand-made malformed streams get their error class") {
   SUBCASE("a declared count that disagrees with the octree") {
     Chunks c = base;
     ByteWriter w;
-    w.u8(0), w.u8(0), w.varint(1), w.varint(99);
+    w.u8(0), w.u8(1), w.varint(1), w.varint(99);
     c.list[0].second = w.data();
     CHECK(decode_status(c.bytes()) == Status::bad_layer);
   }

@@ -118,12 +118,14 @@ TEST_CASE("Huffman tables and symbols round trip for many distributions") {
       ++freq[s];
     }
     auto code = HuffmanCode::from_frequencies(freq);
+    // Both table forms (spec 7.1), alternately.
+    const TableForm form = trial % 2 ? TableForm::nibbles : TableForm::deltas;
     BitWriter w;
-    code.write(w);
+    code.write(w, form);
     for (auto s : msg) code.encode(w, s);
     auto bytes = w.finish();
     BitReader r(bytes.data(), bytes.size(), "t");
-    auto back = HuffmanCode::read(r, alphabet, "t");
+    auto back = HuffmanCode::read(r, alphabet, "t", form);
     for (std::uint32_t s = 0; s < alphabet; ++s) REQUIRE(back.length(s) == code.length(s));
     for (auto s : msg) REQUIRE(back.decode(r) == s);
     r.expect_end();
@@ -131,14 +133,15 @@ TEST_CASE("Huffman tables and symbols round trip for many distributions") {
 }
 
 TEST_CASE("invalid code-length tables are bad_huffman_table") {
-  auto table = [](const std::function<void(BitWriter&)>& f, std::uint32_t alphabet) {
+  auto table = [](const std::function<void(BitWriter&)>& f, std::uint32_t alphabet,
+                  TableForm form = TableForm::nibbles) {
     BitWriter w;
     f(w);
     auto bytes = w.finish();
     bytes.resize(bytes.size() + 8, 0);
     return status_of([&] {
       BitReader r(bytes.data(), bytes.size(), "t");
-      HuffmanCode::read(r, alphabet, "t");
+      HuffmanCode::read(r, alphabet, "t", form);
     });
   };
   // Over-subscribed: three symbols of length 1.
@@ -153,6 +156,70 @@ TEST_CASE("invalid code-length tables are bad_huffman_table") {
   CHECK(table([](BitWriter& w) { w.put(1, 1); w.put(6, 3); }, 5) == Status::bad_huffman_table);
   // A valid table for contrast: lengths 1, 2, 2.
   CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(1, 4); w.put(2, 4); w.put(2, 4); }, 3) == Status::ok);
+
+  // The delta form: tokens 00 same, 01 zero run, 100 +1, 101 -1, 1100 +2,
+  // 1101 -2, 1110 end, 1111 s ue far; the first length is relative to 3.
+  const auto d = TableForm::deltas;
+  // Lengths 1, 2, 2 (3 -2 = 1, +1, same): valid.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(0b1101, 4); w.put(0b100, 3); w.put(0b00, 2); }, 3, d) == Status::ok);
+  // The same with a zero run between and the end token after: valid.
+  CHECK(table([](BitWriter& w) {
+          w.put(0, 1); w.put(0b1101, 4); w.put(0b01, 2); w.exp_golomb(1); w.put(0b100, 3); w.put(0b00, 2); w.put(0b1110, 4);
+        }, 9, d) == Status::ok);
+  // Over-subscribed: three lengths 1.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(0b1101, 4); w.put(0b00, 2); w.put(0b00, 2); }, 3, d) == Status::bad_huffman_table);
+  // Incomplete: lengths 1, 2, then the end token.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(0b1101, 4); w.put(0b100, 3); w.put(0b1110, 4); }, 5, d) == Status::bad_huffman_table);
+  // A length below 1 (3 - 2 - 1 = 0) and above 15 (3 + 13 = 16, a far token).
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(0b1101, 4); w.put(0b101, 3); }, 3, d) == Status::bad_huffman_table);
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(0b1111, 4); w.put(0, 1); w.exp_golomb(10); }, 3, d) == Status::bad_huffman_table);
+  // One symbol only, then the end token; a zero run past the alphabet.
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(0b00, 2); w.put(0b1110, 4); }, 4, d) == Status::bad_huffman_table);
+  CHECK(table([](BitWriter& w) { w.put(0, 1); w.put(0b1101, 4); w.put(0b01, 2); w.exp_golomb(5); }, 4, d) == Status::bad_huffman_table);
+}
+
+TEST_CASE("delta-form tables: every length and every token, and smaller than 4-bit lengths on skewed codes") {
+  // Each length 1..15 after each length 1..15 (so every difference from
+  // -14 to +14), on a code that stays complete: a chain of lengths
+  // 1, 2, ..., 14, 15, 15 padded with pairs so that the deltas vary.
+  for (int a = 1; a <= 15; ++a)
+    for (int b = 1; b <= 15; ++b) {
+      // Lengths: a, b somewhere in a complete code built around them.
+      std::vector<std::uint8_t> lengths;
+      std::uint64_t kraft = 0;  // in units of 2^-15
+      auto add = [&](int len) {
+        lengths.push_back(static_cast<std::uint8_t>(len));
+        kraft += std::uint64_t{1} << (15 - len);
+      };
+      add(a);
+      if (kraft + (std::uint64_t{1} << (15 - b)) > (1u << 15)) continue;
+      add(b);
+      lengths.push_back(0);  // a zero run between
+      // Fill the rest with the longest lengths that fit, greedily.
+      for (int len = 1; len <= 15 && kraft < (1u << 15); ++len)
+        while (kraft + (std::uint64_t{1} << (15 - len)) <= (1u << 15)) add(len);
+      if (lengths.size() < 3) continue;
+      lengths.resize(lengths.size() + 5, 0);  // trailing zeros: the end token
+      CAPTURE(a);
+      CAPTURE(b);
+      const auto code = HuffmanCode::from_lengths(lengths, "t");
+      for (const TableForm form : {TableForm::deltas, TableForm::nibbles}) {
+        BitWriter w;
+        code.write(w, form);
+        auto bytes = w.finish();
+        BitReader r(bytes.data(), bytes.size(), "t");
+        const auto back = HuffmanCode::read(r, static_cast<std::uint32_t>(lengths.size()), "t", form);
+        for (std::uint32_t s = 0; s < lengths.size(); ++s) REQUIRE(back.length(s) == lengths[s]);
+      }
+    }
+  // A geometric distribution over 255 symbols, as ranked occupancies are.
+  std::vector<std::uint64_t> freq(255, 0);
+  for (std::size_t s = 0; s < 40; ++s) freq[s] = 1 + (std::uint64_t{1} << 20 >> (s / 2));
+  const auto code = HuffmanCode::from_frequencies(freq);
+  BitWriter nib, del;
+  code.write(nib, TableForm::nibbles);
+  code.write(del, TableForm::deltas);
+  CHECK(del.bit_count() < nib.bit_count() * 3 / 4);
 }
 
 TEST_CASE("canonical codes are assigned by (length, symbol)") {

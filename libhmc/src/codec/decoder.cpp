@@ -203,17 +203,18 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
       level.lod = static_cast<int>(counts.size() - 1 - k);
       s_->reserve(counts[k] * kPointBytes, "level " + std::to_string(level.lod) + " (" + std::to_string(counts[k]) + " points)");
       if (k == 0) {
-        level.points = decode_base(c.payload, c.length, walk.quantizer->bits, counts.front());
+        level.points = decode_base(c.payload, c.length, walk.quantizer->bits, counts.front(), walk.header->tables);
       } else {
         const auto& coarse = previous_points;
         const std::uint64_t n = counts[k] - counts[k - 1];
         std::vector<GridPoint> added;
         if (c.payload[0] == static_cast<std::uint8_t>(RefineCoder::conditional_octree)) {
-          added = decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, n);
+          added = decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, n, walk.header->tables);
         } else if (c.payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq)) {
           if (!out.vector_quantizer)
             fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");
-          added = decode_vq_layer(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, *out.vector_quantizer, n);
+          added = decode_vq_layer(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, *out.vector_quantizer, n,
+                                  walk.header->tables);
         } else {
           fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
         }
@@ -234,7 +235,7 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
     }
     case ChunkWalker::Action::recon: {
       if (!pending) break;  // a level after the requested one
-      ReconParams params = read_recon(c, pending->points.size());
+      ReconParams params = read_recon(c, pending->points.size(), walk.header->tables);
       if (options.reconstruct) {
         // Levels are reconstructed coarsest first, so the last one is the
         // coarser level, whose points are a subset of these (none before

@@ -28,7 +28,7 @@ bool is_known_chunk(const ChunkType& t) {
 std::vector<std::uint8_t> Header::write() const {
   ByteWriter w;
   w.u8(static_cast<std::uint8_t>(kind));
-  w.u8(0);  // flags, reserved
+  w.u8(tables == TableForm::deltas ? 1 : 0);  // flags: bit 0, delta tables
   w.varint(points.size());
   for (std::uint64_t n : points) w.varint(n);
   return std::move(w.data());
@@ -41,7 +41,8 @@ Header Header::read(const ChunkView& c, const DecodeLimits& limits) {
   if (kind > 2) fail(Status::bad_header, "HEAD: kind " + std::to_string(kind) + " is not 0, 1 or 2");
   h.kind = static_cast<Kind>(kind);
   const std::uint8_t flags = r.u8();
-  if (flags != 0) fail(Status::bad_header, "HEAD: reserved flags are " + std::to_string(flags) + ", must be 0");
+  if (flags > 1) fail(Status::bad_header, "HEAD: reserved flag bits are set (flags " + std::to_string(flags) + ")");
+  h.tables = flags & 1 ? TableForm::deltas : TableForm::nibbles;
   const std::uint64_t levels = r.varint();
   if (levels < 1 || levels > kMaxLevels)
     fail(Status::bad_header, "HEAD: level count " + std::to_string(levels) + " is outside 1..64");
@@ -196,13 +197,13 @@ std::vector<std::uint8_t> write_class_groups(const std::vector<std::uint8_t>& cl
   return best;
 }
 
-std::vector<std::uint8_t> read_class_groups(BitReader& br, std::uint32_t classes, std::uint64_t points) {
+std::vector<std::uint8_t> read_class_groups(BitReader& br, std::uint32_t classes, std::uint64_t points, TableForm form) {
   const int group = static_cast<int>(br.get(3)) + 1;
   const std::uint32_t alphabet = class_alphabet(classes, group);
   if (alphabet == 0)
     fail(Status::bad_layer, "RCON: " + std::to_string(classes) + " classes in groups of " + std::to_string(group) +
                                 " make an alphabet over 4096");
-  const auto code = HuffmanCode::read(br, alphabet, "RCON class table");
+  const auto code = HuffmanCode::read(br, alphabet, "RCON class table", form);
   std::vector<std::uint8_t> cls(points);
   for (std::uint64_t b = 0; b * static_cast<std::uint64_t>(group) < points; ++b) {
     std::uint32_t s = code.decode(br);
@@ -308,7 +309,7 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   return std::move(w.data());
 }
 
-ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
+ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form) {
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
@@ -342,9 +343,9 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points) {
   if (k > 1) {
     BitReader br(r.here(), r.remaining(), "RCON classes");
     if (p.compact) {
-      p.vertex_class = read_class_groups(br, static_cast<std::uint32_t>(k), points);
+      p.vertex_class = read_class_groups(br, static_cast<std::uint32_t>(k), points, form);
     } else {
-      const auto code = HuffmanCode::read(br, static_cast<std::uint32_t>(k), "RCON class table");
+      const auto code = HuffmanCode::read(br, static_cast<std::uint32_t>(k), "RCON class table", form);
       p.vertex_class.resize(points);
       for (auto& v : p.vertex_class) v = static_cast<std::uint8_t>(code.decode(br));
     }

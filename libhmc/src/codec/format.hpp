@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "container/container.hpp"
+#include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
 #include "reconstruct/reconstruct.hpp"
 
@@ -35,6 +36,9 @@ constexpr std::uint32_t kMaxCodebookSize = 65536;
 struct Header {
   Kind kind = Kind::points;
   std::vector<std::uint64_t> points;  ///< cumulative point count per level, coarsest first
+  /// Flag bit 0 (spec 0.10): every code-length table of the stream uses the
+  /// delta form of spec 7.1; without it, the 4-bit form.
+  TableForm tables = TableForm::deltas;
 
   std::vector<std::uint8_t> write() const;
   static Header read(const ChunkView& c, const DecodeLimits& limits);
@@ -48,7 +52,7 @@ VectorQuantizer read_vector_quantizer(const ChunkView& c);
 
 /// RCON: reconstruction side information of one level with `points` points.
 std::vector<std::uint8_t> write_recon(const ReconParams& p);
-ReconParams read_recon(const ChunkView& c, std::uint64_t points);
+ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form = TableForm::deltas);
 
 constexpr std::uint32_t kMaxClasses = 64;
 constexpr std::uint32_t kMaxScaleRank = 64;

@@ -135,7 +135,31 @@ void HuffmanCode::assign_codes() {
   }
 }
 
-HuffmanCode HuffmanCode::read(BitReader& in, std::uint32_t alphabet, const std::string& what) {
+namespace {
+
+// The delta form (spec 7.1): the length before the first non-zero one, and
+// the tokens, read most significant bit first:
+//   00 same length    100 +1    1100 +2    1110 end (the rest are zero)
+//   01 zero run       101 -1    1101 -2    1111 s ue: -(ue + 3) if s, else +(ue + 3)
+constexpr int kDeltaStart = 3;
+enum class Token { same, zero, up1, down1, up2, down2, end, far };
+
+Token read_token(BitReader& in) {
+  if (!in.get(1)) return in.get(1) ? Token::zero : Token::same;
+  if (!in.get(1)) return in.get(1) ? Token::down1 : Token::up1;
+  if (!in.get(1)) return in.get(1) ? Token::down2 : Token::up2;
+  return in.get(1) ? Token::far : Token::end;
+}
+
+int exp_golomb_bits(std::uint32_t v) {
+  int bits = 0;
+  while (((std::uint64_t{v} + 1) >> bits) > 1) ++bits;
+  return 2 * bits + 1;
+}
+
+}  // namespace
+
+HuffmanCode HuffmanCode::read(BitReader& in, std::uint32_t alphabet, const std::string& what, TableForm form) {
   if (in.get(1)) {
     HuffmanCode c;
     c.what_ = what;
@@ -149,21 +173,48 @@ HuffmanCode HuffmanCode::read(BitReader& in, std::uint32_t alphabet, const std::
   }
   std::vector<std::uint8_t> lengths(alphabet, 0);
   std::uint32_t s = 0;
-  while (s < alphabet) {
-    std::uint32_t v = in.get(4);
-    if (v) {
-      lengths[s++] = static_cast<std::uint8_t>(v);
-    } else {
-      std::uint64_t run = std::uint64_t{in.exp_golomb()} + 1;
-      if (run > alphabet - s)
-        fail(Status::bad_huffman_table, what + ": zero run of " + std::to_string(run) + " passes the end of the alphabet");
-      s += static_cast<std::uint32_t>(run);
+  auto zero_run = [&] {
+    const std::uint64_t run = std::uint64_t{in.exp_golomb()} + 1;
+    if (run > alphabet - s)
+      fail(Status::bad_huffman_table, what + ": zero run of " + std::to_string(run) + " passes the end of the alphabet");
+    s += static_cast<std::uint32_t>(run);
+  };
+  if (form == TableForm::nibbles) {
+    while (s < alphabet) {
+      if (const std::uint32_t v = in.get(4)) lengths[s++] = static_cast<std::uint8_t>(v);
+      else zero_run();
     }
+    return from_lengths(lengths, what);
+  }
+  std::int64_t previous = kDeltaStart;
+  while (s < alphabet) {
+    std::int64_t delta = 0;
+    switch (read_token(in)) {
+      case Token::zero: zero_run(); continue;
+      case Token::end: s = alphabet; continue;
+      case Token::same: break;
+      case Token::up1: delta = 1; break;
+      case Token::down1: delta = -1; break;
+      case Token::up2: delta = 2; break;
+      case Token::down2: delta = -2; break;
+      case Token::far: {
+        const bool down = in.get(1) != 0;
+        const std::int64_t m = std::int64_t{in.exp_golomb()} + 3;
+        delta = down ? -m : m;
+        break;
+      }
+    }
+    const std::int64_t len = previous + delta;
+    if (len < 1 || len > kHuffmanMaxLength)
+      fail(Status::bad_huffman_table, what + ": length " + std::to_string(len) + " of symbol " + std::to_string(s) +
+                                          " is outside 1.." + std::to_string(kHuffmanMaxLength));
+    lengths[s++] = static_cast<std::uint8_t>(len);
+    previous = len;
   }
   return from_lengths(lengths, what);
 }
 
-void HuffmanCode::write(BitWriter& out) const {
+void HuffmanCode::write(BitWriter& out, TableForm form) const {
   const std::uint32_t a = alphabet();
   if (single_) {
     out.put(1, 1);
@@ -172,14 +223,40 @@ void HuffmanCode::write(BitWriter& out) const {
   }
   out.put(0, 1);
   std::uint32_t s = 0;
+  int previous = kDeltaStart;
   while (s < a) {
     if (lengths_[s]) {
-      out.put(lengths_[s++], 4);
+      if (form == TableForm::nibbles) {
+        out.put(lengths_[s++], 4);
+        continue;
+      }
+      const int delta = lengths_[s] - previous;
+      previous = lengths_[s++];
+      switch (delta) {
+        case 0: out.put(0b00, 2); break;
+        case 1: out.put(0b100, 3); break;
+        case -1: out.put(0b101, 3); break;
+        case 2: out.put(0b1100, 4); break;
+        case -2: out.put(0b1101, 4); break;
+        default:
+          out.put(0b1111, 4);
+          out.put(delta < 0 ? 1u : 0u, 1);
+          out.exp_golomb(static_cast<std::uint32_t>((delta < 0 ? -delta : delta) - 3));
+      }
       continue;
     }
     std::uint32_t run = 0;
     while (s + run < a && lengths_[s + run] == 0) ++run;
-    out.put(0, 4);
+    if (form == TableForm::nibbles) {
+      out.put(0, 4);
+    } else {
+      // Trailing zeros: the end token, unless the run token is shorter (a run of 1).
+      if (s + run == a && 4 <= 2 + exp_golomb_bits(run - 1)) {
+        out.put(0b1110, 4);
+        return;
+      }
+      out.put(0b01, 2);
+    }
     out.exp_golomb(run - 1);
     s += run;
   }

@@ -19,6 +19,12 @@ constexpr int kHuffmanMaxLength = 15;
 /// 0 as well (it is sent with the single-symbol form and costs no bits).
 std::vector<std::uint8_t> huffman_lengths(const std::vector<std::uint64_t>& freq, int max_len = kHuffmanMaxLength);
 
+/// The two syntaxes of a code-length table (spec 7.1): each length in 4 bits
+/// (streams whose HEAD flag bit 0 is clear), or each length as a token that
+/// gives its difference from the previous length (the bit set; what the
+/// encoder writes since spec 0.10).
+enum class TableForm : std::uint8_t { nibbles, deltas };
+
 /// A canonical code over an alphabet of `size` symbols.
 class HuffmanCode {
  public:
@@ -27,10 +33,10 @@ class HuffmanCode {
   /// Build from frequencies (encoder side).
   static HuffmanCode from_frequencies(const std::vector<std::uint64_t>& freq);
   /// Read the table syntax for an alphabet of `alphabet` symbols.
-  static HuffmanCode read(BitReader& in, std::uint32_t alphabet, const std::string& what);
-
+  static HuffmanCode read(BitReader& in, std::uint32_t alphabet, const std::string& what,
+                          TableForm form = TableForm::deltas);
   /// Write the table syntax.
-  void write(BitWriter& out) const;
+  void write(BitWriter& out, TableForm form = TableForm::deltas) const;
   void encode(BitWriter& out, std::uint32_t symbol) const {
     if (single_) return;
     out.put(codes_[symbol], lengths_[symbol]);

@@ -283,7 +283,7 @@ VqLayer encode_vq_layer(const std::vector<GridPoint>& coarse_in, const std::vect
 
 std::vector<GridPoint> decode_vq_layer(const std::uint8_t* data, std::size_t size, int q,
                                        const std::vector<GridPoint>& coarse, const VectorQuantizer& vq,
-                                       std::uint64_t n_added) {
+                                       std::uint64_t n_added, TableForm form) {
   if (q < 1 || q > 21) fail(Status::invalid_argument, std::string(kWhat) + ": q must be 1..21");
   if (coarse.empty()) fail(Status::invalid_argument, std::string(kWhat) + ": the coarse level is empty");
   if (vq.codebook.empty()) fail(Status::invalid_argument, std::string(kWhat) + ": empty codebook");
@@ -291,13 +291,13 @@ std::vector<GridPoint> decode_vq_layer(const std::uint8_t* data, std::size_t siz
   const std::uint64_t step = r.exp_golomb();
   if (step > kMaxStep)
     fail(Status::bad_layer, std::string(kWhat) + ": residual step " + std::to_string(step) + " is above 2^21 - 1");
-  const HuffmanCode gap_code = HuffmanCode::read(r, kAlphabet, std::string(kWhat) + " anchor table");
+  const HuffmanCode gap_code = HuffmanCode::read(r, kAlphabet, std::string(kWhat) + " anchor table", form);
   const HuffmanCode index_code =
-      HuffmanCode::read(r, static_cast<std::uint32_t>(vq.codebook.size()), std::string(kWhat) + " index table");
+      HuffmanCode::read(r, static_cast<std::uint32_t>(vq.codebook.size()), std::string(kWhat) + " index table", form);
   std::array<HuffmanCode, 3> res_code;
   if (step > 0)
     for (std::size_t a = 0; a < 3; ++a)
-      res_code[a] = HuffmanCode::read(r, kAlphabet, std::string(kWhat) + " residual table " + std::to_string(a));
+      res_code[a] = HuffmanCode::read(r, kAlphabet, std::string(kWhat) + " residual table " + std::to_string(a), form);
   const auto s = static_cast<std::int64_t>(step);
   std::vector<GridPoint> points;
   std::uint64_t anchor = 0;

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
 
 namespace hmc::detail {
@@ -52,7 +53,7 @@ VqLayer encode_vq_layer(const std::vector<GridPoint>& coarse, const std::vector<
 /// canonical and non-empty, `vq` non-empty (invalid_argument otherwise).
 std::vector<GridPoint> decode_vq_layer(const std::uint8_t* data, std::size_t size, int q,
                                        const std::vector<GridPoint>& coarse, const VectorQuantizer& vq,
-                                       std::uint64_t n_added);
+                                       std::uint64_t n_added, TableForm form = TableForm::deltas);
 
 /// One refinement layer of the training set: the coarser level's points
 /// (original, before any lossy coding) and the points the layer adds.

@@ -389,7 +389,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
   return canonical_from_morton(nodes, q, next);  // next: spare capacity for the sort
 }
 
-std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
+std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
@@ -399,11 +399,11 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
     ranked.push_back(in.get(1) == 1);
     const std::string what = "BASE ranked octree table for depth " + std::to_string(d);
     if (!ranked.back()) {
-      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, what));
+      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, what, form));
       continue;
     }
     for (int j = 0; j < classes; ++j) {
-      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 255, what + " context " + std::to_string(j)));
+      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 255, what + " context " + std::to_string(j), form));
       // Every ranked node costs a bit: its nearest-neighbour search is paid
       // for by the stream (spec 8.2).
       if (codes[static_cast<std::size_t>(d)].back().single())
@@ -432,18 +432,18 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
   return out;
 }
 
-std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
+std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
-  if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n);
-  if (data[0] == kRankedCoder) return decode_ranked(data + 1, size - 1, q, n);
+  if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n, form);
+  if (data[0] == kRankedCoder) return decode_ranked(data + 1, size - 1, q, n, form);
   fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
 }
 
-std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n) {
+std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   BitReader in(data, size, "BASE octree");
   std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d)
-    codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, "BASE octree table for depth " + std::to_string(d)));
+    codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, "BASE octree table for depth " + std::to_string(d), form));
   return decode_nodes(in, q, n, codes, std::vector<bool>(static_cast<std::size_t>(q), false), 0);
 }
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
 #include "util/morton.hpp"
 
@@ -19,7 +20,8 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
 
 /// Decode exactly `n` points; raises bad_layer / bad_huffman_table on a
 /// malformed payload. The result is in canonical (x, y, z) ascending order.
-std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n);
+std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n,
+                                     TableForm form = TableForm::deltas);
 
 /// The whole BASE payload (spec section 8): a coder byte, then coder 0
 /// (encode_octree) or coder 1, the ranked octree (8.2), whichever is
@@ -31,7 +33,9 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 
 /// Decode a BASE payload (coder byte first) of exactly `n` points, in
 /// canonical order; bad_layer for an unknown coder.
-std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n);
+/// `form`: the stream's code-length table syntax (HEAD flag bit 0).
+std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n,
+                                   TableForm form = TableForm::deltas);
 
 /// The point of a Morton key of depth q (the inverse of morton_key,
 /// util/morton.hpp).

@@ -446,7 +446,7 @@ std::vector<std::uint8_t> encode_impl(const std::vector<GridPoint>& coarse_in, c
 
 class Decoder {
  public:
-  Decoder(BitReader& in, int q, const std::vector<GridPoint>& coarse, std::uint64_t n_added)
+  Decoder(BitReader& in, int q, const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form)
       : in_(in), q_(q), n_added_(n_added) {
     neighbours_ = static_cast<int>(in.get(4));
     classes_ = static_cast<int>(in.get(2)) + 1;
@@ -456,7 +456,8 @@ class Decoder {
         const auto slot = static_cast<std::size_t>(d * classes_ + k);
         if (in.get(1)) {
           codes_.push_back(HuffmanCode::read(
-              in, kAlphabet, std::string(kWhat) + " table for depth " + std::to_string(d) + " class " + std::to_string(k)));
+              in, kAlphabet, std::string(kWhat) + " table for depth " + std::to_string(d) + " class " + std::to_string(k),
+              form));
           table_[slot] = static_cast<int>(codes_.size() - 1);
         } else if (d > 0) {
           table_[slot] = table_[slot - static_cast<std::size_t>(classes_)];
@@ -524,14 +525,14 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 }
 
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
-                                         const std::vector<GridPoint>& coarse, std::uint64_t n_added) {
+                                         const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form) {
   check_coarse(coarse, q);
   if (n_added == 0) {
     if (size != 0) fail(Status::bad_layer, std::string(kWhat) + ": payload present for zero added points");
     return {};
   }
   BitReader in(data, size, kWhat);
-  const Decoder decoder(in, q, coarse, n_added);
+  const Decoder decoder(in, q, coarse, n_added, form);
   in.expect_end();
   if (decoder.keys.size() != n_added)
     fail(Status::bad_layer, std::string(kWhat) + ": " + std::to_string(decoder.keys.size()) + " points, " +

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
 
 namespace hmc::detail {
@@ -40,6 +41,7 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 /// that, whatever `n_added` claims. `coarse` must be canonical and non-empty
 /// (invalid_argument otherwise).
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
-                                         const std::vector<GridPoint>& coarse, std::uint64_t n_added);
+                                         const std::vector<GridPoint>& coarse, std::uint64_t n_added,
+                                         TableForm form = TableForm::deltas);
 
 }  // namespace hmc::detail
