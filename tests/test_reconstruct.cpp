@@ -652,23 +652,20 @@ TEST_CASE("an open surface's finer levels inherit the coarser level's border (RC
     CHECK(d_full.levels[k].triangles == e.levels[k].triangles);
   }
 
+  // The stream `bytes` with flag bit 3 set on the RCON of level k, decoded.
+  auto with_flag = [&](const std::vector<std::uint8_t>& bytes, std::size_t k) {
+    Chunks c2 = chunks_of(bytes);
+    ReconParams p = read_payload(c2.list[at[k]].second, e.levels[k].points.size());
+    p.border_delta = true;
+    c2.list[at[k]].second = write_recon(p);
+    const auto b = c2.bytes();
+    return decode(b.data(), b.size()).value();
+  };
   // A coarsest level that sets the flag inherits the empty set.
-  Chunks first = chunks_of(e.bytes);
-  ReconParams p0 = read_payload(first.list[at[0]].second, e.levels[0].points.size());
-  p0.border_delta = true;
-  first.list[at[0]].second = write_recon(p0);
-  const auto b0 = first.bytes();
-  const auto d0 = decode(b0.data(), b0.size()).value();
-  CHECK(d0.levels[0].triangles == e.levels[0].triangles);
-
+  CHECK(with_flag(e.bytes, 0).levels[0].triangles == e.levels[0].triangles);
   // Inheriting the wrong set changes the level: flag bit 3 on a finer level
   // whose list is the full set toggles every inherited point off.
-  Chunks wrong = chunks_of(full);
-  ReconParams p2 = read_payload(wrong.list[at[2]].second, e.levels[2].points.size());
-  p2.border_delta = true;
-  wrong.list[at[2]].second = write_recon(p2);
-  const auto bw = wrong.bytes();
-  const auto dw = decode(bw.data(), bw.size()).value();
+  const auto dw = with_flag(full, 2);
   CHECK(dw.levels[1].triangles == e.levels[1].triangles);
   CHECK(dw.levels[2].triangles != e.levels[2].triangles);
 }

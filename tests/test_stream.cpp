@@ -51,6 +51,8 @@ const std::vector<Sample>& samples_of_each_kind() {
     v.push_back({"surface", encode_sample(samples::torus(40, 16), 4)});
     v.push_back({"volume", encode_sample(samples::random_ball(400, 7), 3, Kind::volume)});
     v.push_back({"single-level surface", encode_sample(samples::uv_sphere(8, 16), 1, std::nullopt, 10)});
+    // Open: its finer levels inherit the coarser level's border (RCON flag bit 3).
+    v.push_back({"open surface", encode_sample(samples::height_field(16, 0.15), 3, std::nullopt, 10)});
     return v;
   }();
   return s;
