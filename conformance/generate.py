@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x0a"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x0b"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -381,9 +381,10 @@ def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1):
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
 
-def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False):
-    """§8A.1 conditional octree coder, written from the decoder's ranking
-    (refdec.child_order). coarse: C in canonical order; added: A."""
+def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1):
+    """§8A.1 conditional octree coder (planes = 2: coder 2, §8A.3, with the
+    plane context), written from the decoder's ranking (refdec.child_order).
+    coarse: C in canonical order; added: A."""
     coarse = sorted(coarse)
     occ = [set() for _ in range(q + 1)]
     for (x, y, z) in coarse:
@@ -394,16 +395,18 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
         for d in range(q + 1):
             aocc[d].add((x >> (q - d), y >> (q - d), z >> (q - d)))
     nb = refdec.Neighbours(coarse, q)
-    seq = []  # (d, class, symbol)
+    seq = []  # (d, (class, plane context), symbol)
+    slots = [(j, x) for j in range(classes) for x in range(planes)]
 
     def visit(node, d):
         X, Y, Z = node
         kids = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1)) for c in range(8)]
         m = sum(1 << c for c in range(8) if kids[c] in occ[d + 1])
         j = min(bin(m).count("1"), classes - 1)
-        pi = refdec.child_order(node, d, q, m, coarse, nb, neighbours)
+        pi, split = refdec.child_order(node, d, q, m, coarse, nb, neighbours, want_split=True)
+        x = 1 if planes == 2 and split >= 2 else 0
         rho = sum(1 << r for r in range(8) if kids[pi[r]] in aocc[d + 1])
-        seq.append((d, j, refdec.E.index(rho)))
+        seq.append((d, (j, x), refdec.E.index(rho)))
         if d < q - 1:
             for c in range(8):
                 if kids[c] in aocc[d + 1]:
@@ -414,7 +417,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     bw.put(neighbours, 4)
     bw.put(classes - 1, 2)
     coder = {}
-    for j in range(classes):
+    for j in slots:
         prev = None
         for d in range(q):
             syms = [s for (dd, jj, s) in seq if dd == d and jj == j]
@@ -428,7 +431,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
             else:
                 coder[(d, j)] = False  # flag 0 at depth 0: none
     for d in range(q):
-        for j in range(classes):
+        for j in slots:
             c = coder[(d, j)]
             if c:
                 bw.put(1, 1)
@@ -436,7 +439,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
             else:
                 bw.put(0, 1)
     current = {}
-    for j in range(classes):
+    for j in slots:
         for d in range(q):
             if coder[(d, j)]:
                 current[(d, j)] = coder[(d, j)]
@@ -444,7 +447,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
                 current[(d, j)] = current[(d - 1, j)]
     for (d, j, s) in seq:
         current[(d, j)].put(bw, s)
-    return b"\x00" + bw.bytes()
+    return bytes([2 if planes == 2 else 0]) + bw.bytes()
 
 
 def zigzag(v):
@@ -1001,8 +1004,9 @@ def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), 
         ch.append(["RCON", rcons[0]])
     for i in range(1, len(levels)):
         added = sorted(set(levels[i]) - set(levels[i - 1]))
-        nb, cl, share = refn_opts[i - 1]
-        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share)])
+        nb, cl, share = refn_opts[i - 1][:3]
+        planes = refn_opts[i - 1][3] if len(refn_opts[i - 1]) > 3 else 1
+        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes)])
         if rcons:
             ch.append(["RCON", rcons[i]])
     ch.append(["HEND", b""])
@@ -1120,6 +1124,18 @@ def hb_delta_tables():
                            classes=[1 if i % 5 == 0 else 0 for i in range(n1)], toggles={1: (2,), 4: (0, 3)})
         rc2 = rcon_payload(n2, flags=3, multipliers=(1200,), compact=True, toggles={0: (1, 5)})
         return hand_stream(1, q, lv, [(4, 4, True), (1, 3, False)], rcons=[rc0, rc1, rc2])
+
+
+def hb_refn_planes():
+    # REFN coder 2 (plane contexts): neighbours 4 with 4 and 2 classes, shared
+    # and unshared tables, then neighbours 0 (no plane: every node in plane
+    # context 0) in the delta table form.
+    pts = sphere_pts(400, 9, 71)
+    lv = nested(pts, [60, 150, 280, 400], 72)
+    a = hand_stream(0, 9, lv, [(4, 4, True, 2), (4, 2, False, 2), (0, 1, True, 2)])
+    with delta_tables():
+        b = hand_stream(0, 9, lv[:2], [(4, 3, True, 2)])
+    return a, b
 
 
 def hb_base_ranked_sphere():
@@ -1280,6 +1296,10 @@ HANDBUILT = [
      "hand-written RCON: peel and repair off and on, filters 0, 2, 3 then all six, K = 3 and 2 (class bit streams), border, toggle and drop lists; origin and step not the encoder's", sec("rcon", "recon", "sqnt")),
     ("tables-delta-handbuilt", hb_delta_tables, F,
      "HEAD flag bit 0: every code-length table in the delta form (BASE, REFN with 4 and 3 classes and unshared tables, RCON class tables plain and grouped)", sec("head", "huff", "base", "refn", "rcon", "recon")),
+    ("refn-planes", lambda: hb_refn_planes()[0], P,
+     "REFN coder 2 (plane contexts): neighbours 4 with 4 and 2 classes, shared and unshared tables, then neighbours 0 (every node in plane context 0)", sec("refn", "huff")),
+    ("refn-planes-delta-tables", lambda: hb_refn_planes()[1], P,
+     "REFN coder 2 with three classes, its tables in the delta form", sec("head", "refn", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
      "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
@@ -1490,6 +1510,8 @@ NEGATIVE = [
     ("neg-huffman-single-out-of-range", "bad_huffman_table", P, "REFN single-symbol table with symbol 255 of 255", ["7.1", "8A", "13"],
      lambda: stream_q1_refn(refn_single(255))),
     ("neg-huffman-rcon-classes", "bad_huffman_table", P, "RCON class table (K = 2) with one symbol of length 1 only", ["7.1", "10", "13"], None),
+    ("neg-refn-plane-slot-none", "bad_layer", P, "REFN coder 2 at q = 1 whose only slot with a table is plane context 1; the node is in context 0", ["8A.3", "13"],
+     lambda: stream_q1_refn(b"\x02" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1), bw.put(1, 1), bw.put(0, 8))))),
     ("neg-huffman-delta-length-0", "bad_huffman_table", P, "delta-form BASE table: 3 - 2 - 1 gives a length 0", ["4", "7.1", "13"],
      lambda: stream_q1(base_with_table(lambda bw: (bw.put(0, 1), bw.put(0b1101, 4), bw.put(0b101, 3))), flags=1)),
     ("neg-huffman-delta-length-16", "bad_huffman_table", P, "delta-form BASE table: a far token +13 gives a length 16", ["4", "7.1", "13"],
@@ -1526,8 +1548,8 @@ NEGATIVE = [
      lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
     ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
-    ("neg-refn-coder", "bad_layer", P, "REFN coder 2", ["8A", "13"],
-     lambda: stream_q1_refn(b"\x02" + refn_single(0)[1:])),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 3", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x03" + refn_single(0)[1:])),
     ("neg-vq-no-vqtb", "bad_layer", P, "a REFN of coder 1 in a stream without VQTB", ["8A.2", "13"],
      lambda: vq_neg(drop_vqtb=True)),
     ("neg-vq-anchor-range", "bad_layer", P, "coder 1: an anchor equal to the number of coarse points", ["8A.2", "13"],

@@ -442,18 +442,20 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
         return decode_vq(payload, q, coarse, n, codebook, form)
-    if payload[0] != 0:
+    if payload[0] not in (0, 2):
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
+    planes = 2 if payload[0] == 2 else 1  # §8A.3: coder 2 adds the plane context
     br = BitReader(payload, 1, "bad_layer", "REFN")
     neighbours = br.bits(4)
     classes = br.bits(2) + 1
-    table = [[None] * classes for _ in range(q)]
+    table = [[[None] * planes for _ in range(classes)] for _ in range(q)]
     for d in range(q):
         for j in range(classes):
-            if br.bits(1) == 1:
-                table[d][j] = read_code(br, 255, form)
-            elif d > 0:
-                table[d][j] = table[d - 1][j]
+            for x in range(planes):
+                if br.bits(1) == 1:
+                    table[d][j][x] = read_code(br, 255, form)
+                elif d > 0:
+                    table[d][j][x] = table[d - 1][j][x]
     # Occupied nodes of C per depth.
     occ = [set() for _ in range(q + 1)]
     for (x, y, z) in coarse:
@@ -471,12 +473,13 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
             if kids[c] in occ[d + 1]:
                 m |= 1 << c
         w = bin(m).count("1")
-        T = table[d][min(w, classes - 1)]
+        pi, split = child_order(node, d, q, m, coarse, nb, neighbours, want_split=True)
+        x = 1 if planes == 2 and split >= 2 else 0
+        T = table[d][min(w, classes - 1)][x]
         if T is None:
-            raise DecodeError("bad_layer", "REFN: depth %d class %d has no table" % (d, min(w, classes - 1)))
+            raise DecodeError("bad_layer", "REFN: depth %d class %d plane context %d has no table" % (d, min(w, classes - 1), x))
         s = T.decode(br, "bad_layer")
         rho = E[s]
-        pi = child_order(node, d, q, m, coarse, nb, neighbours)
         occupied = [0] * 8
         for r in range(8):
             if rho >> r & 1:

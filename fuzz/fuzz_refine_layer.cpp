@@ -3,8 +3,9 @@
 // bits, against a coarser level built from the input.
 //
 // Input: u8 q (mapped to 1..21), u8 coarse count c (1..64), c points of
-// 3 x u24 (masked to the grid), u16 added count n (1..4096), then the REFN
-// bit stream (without its coder byte). Checks: only bad_layer /
+// 3 x u24 (masked to the grid), u16 added count n (1..4096), u8 coder (bit
+// 0: coder 2, plane contexts, else coder 0), then the REFN bit stream
+// (without its coder byte). Checks: only bad_layer /
 // bad_huffman_table are raised; a decoded layer has exactly n distinct new
 // points on the grid, none in the coarser level, in canonical order; coding
 // them again decodes to the same points.
@@ -20,10 +21,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   int q = 0;
   const std::vector<hmc::GridPoint> coarse = hmc_fuzz::read_coarse_level(params, q);
   const std::uint64_t n = 1 + params.u16() % 4096;
+  const bool planes = params.u8() & 1;
 
   std::vector<hmc::GridPoint> added;
   try {
-    added = hmc::detail::decode_refinement(params.rest(), params.rest_size(), q, coarse, n);
+    added = hmc::detail::decode_refinement(params.rest(), params.rest_size(), q, coarse, n, hmc::detail::TableForm::deltas,
+                                           planes);
   } catch (const hmc::detail::StreamError& e) {
     const hmc::Status s = e.error().status;
     FUZZ_CHECK(s == hmc::Status::bad_layer || s == hmc::Status::bad_huffman_table, "decode_refinement raised %s: %s",
@@ -31,10 +34,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   hmc_fuzz::check_added_layer(added, coarse, n, q);
-  const auto again = hmc::detail::encode_refinement(coarse, added, q);
+  const auto again = hmc::detail::encode_refinement_layer(coarse, added, q);
   std::vector<hmc::GridPoint> back;
   try {
-    back = hmc::detail::decode_refinement(again.data(), again.size(), q, coarse, n);
+    back = hmc::detail::decode_refinement(again.bytes.data(), again.bytes.size(), q, coarse, n,
+                                          hmc::detail::TableForm::deltas, again.coder == 2);
   } catch (const hmc::detail::StreamError& e) {
     FUZZ_CHECK(false, "a re-encoded layer does not decode: %s", e.what());
   }

@@ -563,3 +563,31 @@ TEST_CASE("radix_sort, morton_point and sort_canonical agree with the plain defi
     CHECK(points == want);
   }
 }
+
+TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the smaller coder") {
+  const int q = 12;
+  const Points pts = quantize(samples::torus(40, 24), q);
+  const Split s = split_random(pts, 0.3, 5);
+  for (int k : {0, 1, 4, 15})
+    for (int classes = 1; classes <= 4; ++classes) {
+      CAPTURE(k);
+      CAPTURE(classes);
+      RefinementParams p{k, classes};
+      p.plane_contexts = true;
+      const auto bytes = encode_refinement(s.coarse, s.added, q, p);
+      CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas, true) ==
+            sorted(s.added));
+      // Read as coder 0, the slot flags and tables no longer line up.
+      Points as_plain;
+      const Status st =
+          status_of([&] { as_plain = decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size()); });
+      CHECK((st == Status::bad_layer || st == Status::bad_huffman_table || (st == Status::ok && as_plain != sorted(s.added))));
+    }
+  const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
+  REQUIRE((layer.coder == 0 || layer.coder == 2));
+  const auto plain = encode_refinement(s.coarse, s.added, q);
+  CHECK(layer.bytes.size() <= plain.size());
+  if (layer.coder == 0) CHECK(layer.bytes == plain);
+  CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                          layer.coder == 2) == sorted(s.added));
+}

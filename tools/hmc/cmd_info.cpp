@@ -68,7 +68,7 @@ int cmd_info(int argc, char** argv) {
                 static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
                 static_cast<unsigned long long>(l.stream_bytes),
                 8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points),
-                i == 0 ? "octree" : l.coder == 1 ? "anchored VQ (lossy)" : l.coder == 0 ? "conditional octree" : "unknown");
+                i == 0 ? "octree" : l.coder == 1 ? "anchored VQ (lossy)" : l.coder == 0 ? "conditional octree" : l.coder == 2 ? "conditional octree, plane contexts" : "unknown");
   }
   if (s.truncated) std::printf("\nwarning: %s\n", s.warning.c_str());
   return kOk;

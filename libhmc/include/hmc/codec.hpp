@@ -146,7 +146,8 @@ struct LevelReport {
   double mean_importance_retained = 0;         ///< mean IP (eq. 3.1) of the interior vertices kept
 
   /// Refinement coder of this level's layer: 0 conditional octree (exact),
-  /// 1 anchored vector quantizer (EncodeOptions::vq_bits); 0 for the base.
+  /// 1 anchored vector quantizer (EncodeOptions::vq_bits), 2 conditional
+  /// octree with plane contexts (exact); 0 for the base.
   int coder = 0;
   // Encoder only, coder 1: distances (grid units) of the decoded added
   // points from the input's, and input points the layer could not place.

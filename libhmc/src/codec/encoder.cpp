@@ -296,16 +296,17 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
     if (exact && layer_exact) {
       // Both coders are exact here: keep the smaller (and the other, in
       // case the codebook costs more than coder 1 saves: see below).
-      std::vector<std::uint8_t> octree = encode_refinement(decoded, plan.added, q);
-      octree.insert(octree.begin(), static_cast<std::uint8_t>(RefineCoder::conditional_octree));
+      const RefinementLayer exact_layer = encode_refinement_layer(decoded, plan.added, q);
+      std::vector<std::uint8_t> octree{exact_layer.coder};
+      octree.insert(octree.end(), exact_layer.bytes.begin(), exact_layer.bytes.end());
       if (octree.size() < payload.size()) std::swap(octree, payload);
       if (payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq)) octree_payloads[i] = std::move(octree);
     }
     const bool lossy_layer = payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq);
     vq_used = vq_used || lossy_layer;
     LevelReport& lr = plan.report;
+    lr.coder = payload[0];
     if (lossy_layer) {
-      lr.coder = 1;
       lr.max_error = layer.max_error;
       lr.rms_error = std::sqrt(layer.sum_error2 / static_cast<double>(added.size()));
       lr.dropped_points = layer.dropped;
@@ -371,7 +372,7 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
       for (std::size_t i = 0; i < payloads.size(); ++i)
         if (!octree_payloads[i].empty()) {
           payloads[i] = std::move(octree_payloads[i]);
-          plans[i].report.coder = 0;
+          plans[i].report.coder = payloads[i][0];
         }
       vq_used = false;
     }
@@ -497,10 +498,12 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
       w.chunk(kRefinement, lossy_payloads[i]);
       level.new_points = plans[i].added.size();
     } else {
-      layer.u8(static_cast<std::uint8_t>(RefineCoder::conditional_octree));
-      layer.bytes(encode_refinement(plans[i + 1].points, plans[i].added, q));
+      const RefinementLayer refinement = encode_refinement_layer(plans[i + 1].points, plans[i].added, q);
+      layer.u8(refinement.coder);
+      layer.bytes(refinement.bytes);
       w.chunk(kRefinement, layer.data());
       level.new_points = plans[i].added.size();
+      level.coder = refinement.coder;
     }
     level.points = plan.points.size();
     level.layer_bytes = w.size() - before;

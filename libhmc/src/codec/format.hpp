@@ -58,6 +58,7 @@ constexpr std::uint32_t kMaxClasses = 64;
 constexpr std::uint32_t kMaxScaleRank = 64;
 
 /// Refinement-layer coders (first byte of REFN).
-enum class RefineCoder : std::uint8_t { conditional_octree = 0, anchored_vq = 1 };
+/// REFN coders (spec 8A): 0 and 2 exact (2 adds plane contexts), 1 lossy.
+enum class RefineCoder : std::uint8_t { conditional_octree = 0, anchored_vq = 1, conditional_octree_planes = 2 };
 
 }  // namespace hmc::detail

@@ -21,6 +21,8 @@ constexpr int kMaxNeighbours = 15;        // 4-bit header field
 constexpr int kMaxClasses = 4;            // 2-bit header field
 constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
 const char* const kWhat = "refinement layer";
+// REFN coder numbers (spec 8A) of the two forms this file codes.
+constexpr std::uint8_t kPlainCoder = 0, kPlaneCoder = 2;
 
 using Vec = std::array<std::int64_t, 3>;
 using Point32 = Doubled;
@@ -185,7 +187,7 @@ class CoarseLevel {
   /// by child number. `inherited` are the parent's candidates (or null);
   /// returns those for the node's children: `inherited` or `fresh`.
   const Candidates* rank(int d, std::uint64_t key, unsigned coarse_mask, const Candidates* inherited,
-                         Candidates& fresh, std::array<int, 8>& order) {
+                         Candidates& fresh, std::array<int, 8>& order, int* split = nullptr) {
     const GridPoint p = morton_point(key, d);
     const std::int64_t h = std::int64_t{1} << (q_ - d);  // node side
     const Vec centre{2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h, 2 * std::int64_t{p[2]} * h + h};
@@ -193,7 +195,7 @@ class CoarseLevel {
     const Candidates* handed = neighbours(centre, inherited, fresh, k);
     std::array<Point32, kMaxNeighbours> nb{};
     for (int i = 0; i < k; ++i) nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
-    rank_children(p, d, q_, nb.data(), k, coarse_mask, order);
+    rank_children(p, d, q_, nb.data(), k, coarse_mask, order, split);
     return handed;
   }
 
@@ -264,10 +266,15 @@ void check_coarse(const std::vector<GridPoint>& coarse, int q) {
 // ---------------------------------------------------------------- encoder
 
 // One coded node: its depth, how many of its children hold coarse points
-// (the context) and its symbol.
+// (the context), its symbol, and whether the fitted plane crosses it (at
+// least two children on each side: the plane context of coder 2).
 struct Symbol {
-  std::uint8_t depth, weight, index;
+  std::uint8_t depth, weight, index, plane;
 };
+
+// The plane context (spec 8A.3) from the count of children on the smaller
+// side of the plane.
+std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 
 class Traversal {
  public:
@@ -294,11 +301,12 @@ class Traversal {
     }
     CoarseLevel::Candidates fresh;
     std::array<int, 8> order{};
-    const CoarseLevel::Candidates* handed = coarse_.rank(d, key, mask, inherited, fresh, order);
+    int split = 0;
+    const CoarseLevel::Candidates* handed = coarse_.rank(d, key, mask, inherited, fresh, order, &split);
     unsigned ranked = 0;
     for (std::size_t r = 0; r < 8; ++r) ranked |= ((occ >> order[r]) & 1u) << r;
     symbols.push_back({static_cast<std::uint8_t>(d), static_cast<std::uint8_t>(popcount8(mask)),
-                       occupancy_order().index[ranked]});
+                       occupancy_order().index[ranked], plane_context(split)});
     if (d + 1 == q_) return;
     for (std::size_t c = 0; c < 8; ++c)
       if (occ & (1u << c)) visit(d + 1, (key << 3) | c, cb[c], cb[c + 1], ab[c], ab[c + 1], handed);
@@ -317,65 +325,84 @@ std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
   return w.bit_count() + code.cost(freq);
 }
 
-// Which table each (depth, class) slot uses. Per class, consecutive depths
-// share a table when that costs fewer bits than a table of their own.
+// Which table each (depth, class, plane context) slot uses. Per class and
+// plane context, consecutive depths share a table when that costs fewer bits
+// than a table of their own. Slot (d, k, x) is (d * classes + k) * planes + x,
+// the order of the stream; planes is 1 (coder 0) or 2 (coder 2).
 struct TablePlan {
-  int classes = 1;
-  std::vector<bool> fresh;                       // [d * classes + k]: a table is sent
-  std::vector<int> table;                        // [d * classes + k]: the table used, -1 for none
+  int classes = 1, planes = 1;
+  std::vector<bool> fresh;                       // [slot]: a table is sent
+  std::vector<int> table;                        // [slot]: the table used, -1 for none
   std::vector<std::vector<std::uint64_t>> freq;  // per table
   std::uint64_t bits = 0;                        // header, tables and symbols
 };
 
-// freq9[(d * 9 + w) * kAlphabet + s]: symbols s at depth d of nodes with w
-// children holding coarse points.
-TablePlan plan_tables(const std::vector<std::uint64_t>& freq9, int q, int classes) {
+// freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
+// nodes with w children holding coarse points and plane context x.
+TablePlan plan_tables(const std::vector<std::uint64_t> &freq, int q,
+                      int classes, int planes) {
   TablePlan plan;
   plan.classes = classes;
-  const auto slots = static_cast<std::size_t>(q * classes);
+  plan.planes = planes;
+  const auto slots = static_cast<std::size_t>(q * classes * planes);
   plan.fresh.assign(slots, false);
   plan.table.assign(slots, -1);
-  plan.bits = 6 + slots;  // header fields, one flag per slot
+  plan.bits = 6 + slots; // header fields, one flag per slot
   std::vector<std::uint64_t> f(kAlphabet);
-  for (int k = 0; k < classes; ++k) {
-    int current = -1;
-    std::uint64_t current_bits = 0;
-    for (int d = 0; d < q; ++d) {
-      std::fill(f.begin(), f.end(), 0);
-      bool used = false;
-      for (int w = k; w <= (k == classes - 1 ? 8 : k); ++w)
-        for (std::size_t s = 0; s < kAlphabet; ++s) {
-          const std::uint64_t x = freq9[(static_cast<std::size_t>(d) * 9 + static_cast<std::size_t>(w)) * kAlphabet + s];
-          f[s] += x;
-          used = used || x;
-        }
-      const auto slot = static_cast<std::size_t>(d * classes + k);
-      plan.table[slot] = current;
-      if (!used) continue;
-      const std::uint64_t alone = code_bits(f);
-      if (current >= 0) {
-        std::vector<std::uint64_t> merged = plan.freq[static_cast<std::size_t>(current)];
-        for (std::size_t s = 0; s < kAlphabet; ++s) merged[s] += f[s];
-        const std::uint64_t together = code_bits(merged);
-        if (together - current_bits <= alone) {
-          plan.freq[static_cast<std::size_t>(current)] = std::move(merged);
-          current_bits = together;
+  for (int k = 0; k < classes; ++k)
+    for (int x = 0; x < planes; ++x) {
+      int current = -1;
+      std::uint64_t current_bits = 0;
+      for (int d = 0; d < q; ++d) {
+        std::fill(f.begin(), f.end(), 0);
+        bool used = false;
+        for (int w = k; w <= (k == classes - 1 ? 8 : k); ++w)
+          for (int y = 0; y < 2; ++y) {
+            if (planes == 2 && y != x)
+              continue;
+            const std::size_t row = (static_cast<std::size_t>(d) * 9 +
+                                     static_cast<std::size_t>(w)) *
+                                        2 +
+                                    static_cast<std::size_t>(y);
+            for (std::size_t s = 0; s < kAlphabet; ++s) {
+              const std::uint64_t v = freq[row * kAlphabet + s];
+              f[s] += v;
+              used = used || v;
+            }
+          }
+        const auto slot =
+            static_cast<std::size_t>((d * classes + k) * planes + x);
+        plan.table[slot] = current;
+        if (!used)
           continue;
+        const std::uint64_t alone = code_bits(f);
+        if (current >= 0) {
+          std::vector<std::uint64_t> merged =
+              plan.freq[static_cast<std::size_t>(current)];
+          for (std::size_t s = 0; s < kAlphabet; ++s)
+            merged[s] += f[s];
+          const std::uint64_t together = code_bits(merged);
+          if (together - current_bits <= alone) {
+            plan.freq[static_cast<std::size_t>(current)] = std::move(merged);
+            current_bits = together;
+            continue;
+          }
+          plan.bits += current_bits;
         }
-        plan.bits += current_bits;
+        current = static_cast<int>(plan.freq.size());
+        plan.freq.push_back(f);
+        current_bits = alone;
+        plan.fresh[slot] = true;
+        plan.table[slot] = current;
       }
-      current = static_cast<int>(plan.freq.size());
-      plan.freq.push_back(f);
-      current_bits = alone;
-      plan.fresh[slot] = true;
-      plan.table[slot] = current;
+      if (current >= 0)
+        plan.bits += current_bits;
     }
-    if (current >= 0) plan.bits += current_bits;
-  }
   return plan;
 }
 
-std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const TablePlan& plan, int neighbours) {
+std::vector<std::uint8_t> write_layer(const std::vector<Symbol> &symbols,
+                                      const TablePlan &plan, int neighbours) {
   std::vector<HuffmanCode> codes;
   for (const auto& f : plan.freq) codes.push_back(HuffmanCode::from_frequencies(f));
   BitWriter w;
@@ -387,13 +414,15 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   }
   for (const Symbol& s : symbols) {
     const int k = std::min<int>(s.weight, plan.classes - 1);
-    codes[static_cast<std::size_t>(plan.table[static_cast<std::size_t>(s.depth * plan.classes + k)])].encode(w, s.index);
+    const int x = plan.planes == 2 ? s.plane : 0;
+    codes[static_cast<std::size_t>(plan.table[static_cast<std::size_t>((s.depth * plan.classes + k) * plan.planes + x)])]
+        .encode(w, s.index);
   }
   return w.finish();
 }
 
-std::vector<std::uint8_t> encode_impl(const std::vector<GridPoint>& coarse_in, const std::vector<GridPoint>& added_in,
-                                      int q, const RefinementParams* forced) {
+RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::vector<GridPoint>& added_in, int q,
+                            const RefinementParams* forced, bool allow_planes) {
   if (q < 1 || q > 21) fail(Status::invalid_argument, std::string(kWhat) + ": q must be 1..21");
   // The coarse level's canonical order breaks neighbour ties; accept any order here.
   std::vector<GridPoint> coarse = coarse_in;
@@ -405,7 +434,7 @@ std::vector<std::uint8_t> encode_impl(const std::vector<GridPoint>& coarse_in, c
   if (forced && (forced->neighbours < 0 || forced->neighbours > kMaxNeighbours || forced->classes < 1 ||
                  forced->classes > kMaxClasses))
     fail(Status::invalid_argument, std::string(kWhat) + ": parameters out of range");
-  if (added_in.empty()) return {};
+  if (added_in.empty()) return {forced && forced->plane_contexts ? kPlaneCoder : kPlainCoder, {}};
 
   std::vector<std::uint64_t> added(added_in.size());
   for (std::size_t i = 0; i < added.size(); ++i) added[i] = morton_key(added_in[i], q);
@@ -421,23 +450,31 @@ std::vector<std::uint8_t> encode_impl(const std::vector<GridPoint>& coarse_in, c
   std::vector<int> choices{4, 1};
   if (forced) choices = {forced->neighbours};
   else if (coarse.size() == 1) choices = {1};
-  std::vector<std::uint8_t> best;
+  // Coder 2 (plane contexts) doubles the tables; it is kept only when the
+  // stream it gives is smaller.
+  std::vector<int> plane_choices{1};
+  if (forced) plane_choices = {forced->plane_contexts ? 2 : 1};
+  else if (allow_planes) plane_choices = {1, 2};
+  RefinementLayer best;
   CoarseLevel level(coarse, q);
   for (int neighbours : choices) {
     level.set_neighbours(neighbours);
     const Traversal traversal(level, added, q);
-    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 9 * kAlphabet, 0);
+    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 18 * kAlphabet, 0);
     for (const Symbol& s : traversal.symbols)
-      ++freq[(static_cast<std::size_t>(s.depth) * 9 + s.weight) * kAlphabet + s.index];
-    TablePlan plan;
-    bool planned = false;
-    for (int classes = 1; classes <= kMaxClasses; ++classes) {
-      if (forced && classes != forced->classes) continue;
-      TablePlan p = plan_tables(freq, q, classes);
-      if (!planned || p.bits < plan.bits) plan = std::move(p), planned = true;
+      ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
+    for (int planes : plane_choices) {
+      TablePlan plan;
+      bool planned = false;
+      for (int classes = 1; classes <= kMaxClasses; ++classes) {
+        if (forced && classes != forced->classes) continue;
+        TablePlan p = plan_tables(freq, q, classes, planes);
+        if (!planned || p.bits < plan.bits) plan = std::move(p), planned = true;
+      }
+      std::vector<std::uint8_t> bytes = write_layer(traversal.symbols, plan, neighbours);
+      if (best.bytes.empty() || bytes.size() < best.bytes.size())
+        best = {planes == 2 ? kPlaneCoder : kPlainCoder, std::move(bytes)};
     }
-    std::vector<std::uint8_t> bytes = write_layer(traversal.symbols, plan, neighbours);
-    if (best.empty() || bytes.size() < best.size()) best = std::move(bytes);
   }
   return best;
 }
@@ -446,23 +483,24 @@ std::vector<std::uint8_t> encode_impl(const std::vector<GridPoint>& coarse_in, c
 
 class Decoder {
  public:
-  Decoder(BitReader& in, int q, const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form)
-      : in_(in), q_(q), n_added_(n_added) {
+  Decoder(BitReader& in, int q, const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form,
+          int planes)
+      : in_(in), q_(q), n_added_(n_added), planes_(planes) {
     neighbours_ = static_cast<int>(in.get(4));
     classes_ = static_cast<int>(in.get(2)) + 1;
-    table_.assign(static_cast<std::size_t>(q * classes_), -1);
+    const int per_depth = classes_ * planes_;
+    table_.assign(static_cast<std::size_t>(q * per_depth), -1);
     for (int d = 0; d < q; ++d)
-      for (int k = 0; k < classes_; ++k) {
-        const auto slot = static_cast<std::size_t>(d * classes_ + k);
-        if (in.get(1)) {
-          codes_.push_back(HuffmanCode::read(
-              in, kAlphabet, std::string(kWhat) + " table for depth " + std::to_string(d) + " class " + std::to_string(k),
-              form));
-          table_[slot] = static_cast<int>(codes_.size() - 1);
-        } else if (d > 0) {
-          table_[slot] = table_[slot - static_cast<std::size_t>(classes_)];
+      for (int k = 0; k < classes_; ++k)
+        for (int x = 0; x < planes_; ++x) {
+          const auto slot = static_cast<std::size_t>((d * classes_ + k) * planes_ + x);
+          if (in.get(1)) {
+            codes_.push_back(HuffmanCode::read(in, kAlphabet, slot_name(d, k, x), form));
+            table_[slot] = static_cast<int>(codes_.size() - 1);
+          } else if (d > 0) {
+            table_[slot] = table_[slot - static_cast<std::size_t>(per_depth)];
+          }
         }
-      }
     level_.emplace(coarse, q);
     level_->set_neighbours(neighbours_);
     visit(0, 0, 0, level_->size(), nullptr);
@@ -478,14 +516,15 @@ class Decoder {
     for (std::size_t c = 0; c < 8; ++c)
       if (cb[c + 1] > cb[c]) mask |= 1u << c;
     const int k = std::min(popcount8(mask), classes_ - 1);
-    const int t = table_[static_cast<std::size_t>(d * classes_ + k)];
-    if (t < 0)
-      fail(Status::bad_layer, std::string(kWhat) + ": no code for depth " + std::to_string(d) + " class " +
-                                  std::to_string(k));
-    const std::uint32_t ranked = occupancy_order().occupancy[codes_[static_cast<std::size_t>(t)].decode(in_)];
+    // The ranking first: coder 2's table depends on the plane it fits.
     CoarseLevel::Candidates fresh;
     std::array<int, 8> order{};
-    const CoarseLevel::Candidates* handed = level_->rank(d, key, mask, inherited, fresh, order);
+    int split = 0;
+    const CoarseLevel::Candidates* handed = level_->rank(d, key, mask, inherited, fresh, order, &split);
+    const int x = planes_ == 2 ? plane_context(split) : 0;
+    const int t = table_[static_cast<std::size_t>((d * classes_ + k) * planes_ + x)];
+    if (t < 0) fail(Status::bad_layer, std::string(kWhat) + ": no code for " + slot_name(d, k, x));
+    const std::uint32_t ranked = occupancy_order().occupancy[codes_[static_cast<std::size_t>(t)].decode(in_)];
     unsigned occ = 0;
     for (std::size_t r = 0; r < 8; ++r) occ |= ((ranked >> r) & 1u) << order[r];
     if (d + 1 == q_) {
@@ -503,12 +542,18 @@ class Decoder {
       if (occ & (1u << c)) visit(d + 1, (key << 3) | c, cb[c], cb[c + 1], handed);
   }
 
+  std::string slot_name(int d, int k, int x) const {
+    return std::string(kWhat) + " table for depth " + std::to_string(d) + " class " + std::to_string(k) +
+           (planes_ == 2 ? " plane context " + std::to_string(x) : "");
+  }
+
   BitReader& in_;
   int q_;
   std::uint64_t n_added_;
+  int planes_ = 1;
   int neighbours_ = 0, classes_ = 1;
   std::vector<HuffmanCode> codes_;
-  std::vector<int> table_;  // [d * classes + k]: index into codes_, -1 for none
+  std::vector<int> table_;  // [(d * classes + k) * planes + x]: index into codes_, -1 for none
   std::optional<CoarseLevel> level_;
 };
 
@@ -516,23 +561,29 @@ class Decoder {
 
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q) {
-  return encode_impl(coarse, added, q, nullptr);
+  return encode_impl(coarse, added, q, nullptr, false).bytes;
 }
 
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params) {
-  return encode_impl(coarse, added, q, &params);
+  return encode_impl(coarse, added, q, &params, false).bytes;
+}
+
+RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
+                                        int q) {
+  return encode_impl(coarse, added, q, nullptr, true);
 }
 
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
-                                         const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form) {
+                                         const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form,
+                                         bool plane_contexts) {
   check_coarse(coarse, q);
   if (n_added == 0) {
     if (size != 0) fail(Status::bad_layer, std::string(kWhat) + ": payload present for zero added points");
     return {};
   }
   BitReader in(data, size, kWhat);
-  const Decoder decoder(in, q, coarse, n_added, form);
+  const Decoder decoder(in, q, coarse, n_added, form, plane_contexts ? 2 : 1);
   in.expect_end();
   if (decoder.keys.size() != n_added)
     fail(Status::bad_layer, std::string(kWhat) + ": " + std::to_string(decoder.keys.size()) + " points, " +

@@ -21,6 +21,16 @@ namespace hmc::detail {
 struct RefinementParams {
   int neighbours = 4;
   int classes = 4;
+  /// Coder 2 (spec 8A.3): tables also chosen by whether the plane fitted to
+  /// the neighbours crosses the node.
+  bool plane_contexts = false;
+};
+
+/// A refinement layer as the encoder writes it: the REFN coder number (0,
+/// the conditional octree, or 2, the same with plane contexts) and its bits.
+struct RefinementLayer {
+  std::uint8_t coder = 0;
+  std::vector<std::uint8_t> bytes;
 };
 
 /// Codes `added` (distinct grid points, none in `coarse`, any order) given
@@ -31,17 +41,22 @@ struct RefinementParams {
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q);
 
-/// The same with the header fields fixed by the caller (tests, measurements).
+/// The same with the header fields fixed by the caller (tests, measurements);
+/// `params.plane_contexts` selects the bits of coder 2.
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params);
+
+/// What the encoder writes: coder 0 or coder 2, whichever is smaller.
+RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
+                                        int q);
 
 /// Decodes exactly `n_added` points; returns them in canonical order. Raises
 /// bad_layer or bad_huffman_table on malformed data, never reads out of
 /// bounds; memory is bounded by coarse.size() + n_added and work by q times
 /// that, whatever `n_added` claims. `coarse` must be canonical and non-empty
-/// (invalid_argument otherwise).
+/// (invalid_argument otherwise). `plane_contexts`: the bits of coder 2.
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
                                          const std::vector<GridPoint>& coarse, std::uint64_t n_added,
-                                         TableForm form = TableForm::deltas);
+                                         TableForm form = TableForm::deltas, bool plane_contexts = false);
 
 }  // namespace hmc::detail
