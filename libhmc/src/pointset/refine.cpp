@@ -339,15 +339,14 @@ struct TablePlan {
 
 // freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
 // nodes with w children holding coarse points and plane context x.
-TablePlan plan_tables(const std::vector<std::uint64_t> &freq, int q,
-                      int classes, int planes) {
+TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes) {
   TablePlan plan;
   plan.classes = classes;
   plan.planes = planes;
   const auto slots = static_cast<std::size_t>(q * classes * planes);
   plan.fresh.assign(slots, false);
   plan.table.assign(slots, -1);
-  plan.bits = 6 + slots; // header fields, one flag per slot
+  plan.bits = 6 + slots;  // header fields, one flag per slot
   std::vector<std::uint64_t> f(kAlphabet);
   for (int k = 0; k < classes; ++k)
     for (int x = 0; x < planes; ++x) {
@@ -358,29 +357,22 @@ TablePlan plan_tables(const std::vector<std::uint64_t> &freq, int q,
         bool used = false;
         for (int w = k; w <= (k == classes - 1 ? 8 : k); ++w)
           for (int y = 0; y < 2; ++y) {
-            if (planes == 2 && y != x)
-              continue;
-            const std::size_t row = (static_cast<std::size_t>(d) * 9 +
-                                     static_cast<std::size_t>(w)) *
-                                        2 +
-                                    static_cast<std::size_t>(y);
+            if (planes == 2 && y != x) continue;
+            const std::size_t row =
+                (static_cast<std::size_t>(d) * 9 + static_cast<std::size_t>(w)) * 2 + static_cast<std::size_t>(y);
             for (std::size_t s = 0; s < kAlphabet; ++s) {
               const std::uint64_t v = freq[row * kAlphabet + s];
               f[s] += v;
               used = used || v;
             }
           }
-        const auto slot =
-            static_cast<std::size_t>((d * classes + k) * planes + x);
+        const auto slot = static_cast<std::size_t>((d * classes + k) * planes + x);
         plan.table[slot] = current;
-        if (!used)
-          continue;
+        if (!used) continue;
         const std::uint64_t alone = code_bits(f);
         if (current >= 0) {
-          std::vector<std::uint64_t> merged =
-              plan.freq[static_cast<std::size_t>(current)];
-          for (std::size_t s = 0; s < kAlphabet; ++s)
-            merged[s] += f[s];
+          std::vector<std::uint64_t> merged = plan.freq[static_cast<std::size_t>(current)];
+          for (std::size_t s = 0; s < kAlphabet; ++s) merged[s] += f[s];
           const std::uint64_t together = code_bits(merged);
           if (together - current_bits <= alone) {
             plan.freq[static_cast<std::size_t>(current)] = std::move(merged);
@@ -395,14 +387,12 @@ TablePlan plan_tables(const std::vector<std::uint64_t> &freq, int q,
         plan.fresh[slot] = true;
         plan.table[slot] = current;
       }
-      if (current >= 0)
-        plan.bits += current_bits;
+      if (current >= 0) plan.bits += current_bits;
     }
   return plan;
 }
 
-std::vector<std::uint8_t> write_layer(const std::vector<Symbol> &symbols,
-                                      const TablePlan &plan, int neighbours) {
+std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const TablePlan& plan, int neighbours) {
   std::vector<HuffmanCode> codes;
   for (const auto& f : plan.freq) codes.push_back(HuffmanCode::from_frequencies(f));
   BitWriter w;
@@ -415,7 +405,8 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol> &symbols,
   for (const Symbol& s : symbols) {
     const int k = std::min<int>(s.weight, plan.classes - 1);
     const int x = plan.planes == 2 ? s.plane : 0;
-    codes[static_cast<std::size_t>(plan.table[static_cast<std::size_t>((s.depth * plan.classes + k) * plan.planes + x)])]
+    codes[static_cast<std::size_t>(
+              plan.table[static_cast<std::size_t>((s.depth * plan.classes + k) * plan.planes + x)])]
         .encode(w, s.index);
   }
   return w.finish();
