@@ -208,11 +208,11 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
         const auto& coarse = previous_points;
         const std::uint64_t n = counts[k] - counts[k - 1];
         std::vector<GridPoint> added;
-        if (c.payload[0] == static_cast<std::uint8_t>(RefineCoder::conditional_octree) ||
-            c.payload[0] == static_cast<std::uint8_t>(RefineCoder::conditional_octree_planes)) {
+        const auto coder = static_cast<RefineCoder>(c.payload[0]);
+        if (coder == RefineCoder::conditional_octree || coder == RefineCoder::conditional_octree_planes) {
           added = decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, n, walk.header->tables,
-                                    c.payload[0] == static_cast<std::uint8_t>(RefineCoder::conditional_octree_planes));
-        } else if (c.payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq)) {
+                                    coder == RefineCoder::conditional_octree_planes);
+        } else if (coder == RefineCoder::anchored_vq) {
           if (!out.vector_quantizer)
             fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");
           added = decode_vq_layer(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, *out.vector_quantizer, n,

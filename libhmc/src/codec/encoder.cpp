@@ -223,7 +223,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
 std::vector<std::uint8_t> recon_payload(const ReconParams& params, const std::vector<GridPoint>& points,
                                         const LevelPlan* coarser) {
   auto full = write_recon(params);
-  if (!coarser) return full;
+  if (!coarser || (params.border.empty() && coarser->params.border.empty())) return full;
   ReconParams coded = params;
   coded.border = border_change(params.border, inherited_border(points, coarser->points, coarser->params.border));
   coded.border_delta = true;

@@ -151,12 +151,6 @@ Token read_token(BitReader& in) {
   return in.get(1) ? Token::far : Token::end;
 }
 
-int exp_golomb_bits(std::uint32_t v) {
-  int bits = 0;
-  while (((std::uint64_t{v} + 1) >> bits) > 1) ++bits;
-  return 2 * bits + 1;
-}
-
 }  // namespace
 
 HuffmanCode HuffmanCode::read(BitReader& in, std::uint32_t alphabet, const std::string& what, TableForm form) {
@@ -250,8 +244,8 @@ void HuffmanCode::write(BitWriter& out, TableForm form) const {
     if (form == TableForm::nibbles) {
       out.put(0, 4);
     } else {
-      // Trailing zeros: the end token, unless the run token is shorter (a run of 1).
-      if (s + run == a && 4 <= 2 + exp_golomb_bits(run - 1)) {
+      // Trailing zeros: the end token (4 bits), unless a run of one (01 1) is shorter.
+      if (s + run == a && run > 1) {
         out.put(0b1110, 4);
         return;
       }

@@ -454,18 +454,24 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 18 * kAlphabet, 0);
     for (const Symbol& s : traversal.symbols)
       ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
+    // plan.bits is the layer's exact length: the plans are compared in
+    // whole bytes (the smaller coder, coder 0 on a tie) and only the best
+    // one is written.
+    TablePlan plan;
+    bool planned = false;
     for (int planes : plane_choices) {
-      TablePlan plan;
-      bool planned = false;
+      TablePlan with_planes;
+      bool found = false;
       for (int classes = 1; classes <= kMaxClasses; ++classes) {
         if (forced && classes != forced->classes) continue;
         TablePlan p = plan_tables(freq, q, classes, planes);
-        if (!planned || p.bits < plan.bits) plan = std::move(p), planned = true;
+        if (!found || p.bits < with_planes.bits) with_planes = std::move(p), found = true;
       }
-      std::vector<std::uint8_t> bytes = write_layer(traversal.symbols, plan, neighbours);
-      if (best.bytes.empty() || bytes.size() < best.bytes.size())
-        best = {planes == 2 ? kPlaneCoder : kPlainCoder, std::move(bytes)};
+      if (!planned || (with_planes.bits + 7) / 8 < (plan.bits + 7) / 8) plan = std::move(with_planes), planned = true;
     }
+    std::vector<std::uint8_t> bytes = write_layer(traversal.symbols, plan, neighbours);
+    if (best.bytes.empty() || bytes.size() < best.bytes.size())
+      best = {plan.planes == 2 ? kPlaneCoder : kPlainCoder, std::move(bytes)};
   }
   return best;
 }
