@@ -455,15 +455,19 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     // Equal shares first: 1, 2, 4, 8 or 16 classes.
     std::vector<std::size_t> best_splits;
     for (int classes : {1, 2, 4, 8, 16}) {
-      // Each trial on a coarser level runs the repair: try fewer there.
-      if (in.approximate && classes > 4) break;
+      // Each trial on a coarser level runs the repair (unless the fidelity
+      // is rule), which mends what one class leaves: when 2 and 4 classes
+      // were tried there too, all 39 coarser levels of the shared models
+      // (4 levels) kept one.
+      const bool repairs = in.approximate && fidelity != Fidelity::rule;
+      if ((repairs && classes > 1) || (in.approximate && classes > 4)) break;
       std::vector<std::size_t> splits;
       for (int c = 1; c < classes; ++c) splits.push_back(std::min(n - 1, (n * static_cast<std::size_t>(c)) / static_cast<std::size_t>(classes)));
       ReconParams p;
       const std::uint64_t class_bits = with_classes(splits, p);
       for (bool peel : {false, true}) {
         p.peel = peel;
-        p.repair = in.approximate && fidelity != Fidelity::rule;
+        p.repair = repairs;
         if (consider(p, class_bits)) best_splits = splits;
       }
     }

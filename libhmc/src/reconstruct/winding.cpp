@@ -23,15 +23,48 @@ Vec3 cross(const Vec3& a, const Vec3& b) {
 }
 double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 
-// Solid angle of triangle abc seen from q (Van Oosterom & Strackee), signed.
-double solid_angle(const std::array<Vec3, 3>& t, const Vec3& q) {
+// Van Oosterom & Strackee: the solid angle of triangle abc seen from q is
+// 2·arg(den + i·det), with det and den below.
+struct HalfAngle {
+  double det, den;
+};
+HalfAngle half_angle(const std::array<Vec3, 3>& t, const Vec3& q) {
   const Vec3 a = sub(t[0], q), b = sub(t[1], q), c = sub(t[2], q);
   const double la = norm(a), lb = norm(b), lc = norm(c);
-  const double det = dot(a, cross(b, c));
-  const double den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-  return 2 * std::atan2(det, den);
+  return {dot(a, cross(b, c)), la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb};
 }
 
+// Sum of the half solid angles of several triangles with one atan2: the
+// argument of the product of the complex numbers den + i·det, counting the
+// turns the running product makes past -1. A factor with det = 0 (q in the
+// triangle's plane) is added on its own, as atan2 gives it (0 or ±π).
+class HalfAngleSum {
+ public:
+  void add(const HalfAngle& h) {
+    if (h.det == 0) {
+      flat_ += std::atan2(h.det, h.den);
+      return;
+    }
+    const double nr = re_ * h.den - im_ * h.det, ni = re_ * h.det + im_ * h.den;
+    // The product's argument is in (-π, π]; adding one in (0, π) to a
+    // positive one passes π when the new imaginary part is negative, adding
+    // one in (-π, 0) to a negative one passes -π when it is not.
+    const bool positive = im_ > 0 || (im_ == 0 && re_ < 0);
+    if (positive && h.det > 0 && ni < 0) ++turns_;
+    if (im_ < 0 && h.det < 0 && ni >= 0) --turns_;
+    re_ = nr;
+    im_ = ni;
+    // Only the argument matters: rescale before the magnitude could leave
+    // the range of doubles.
+    const double size = std::max(std::fabs(nr), std::fabs(ni));
+    if (size > 1e100 || size < 1e-100) re_ /= size, im_ /= size;
+  }
+  double value() const { return std::atan2(im_, re_) + 2 * kPi * turns_ + flat_; }
+
+ private:
+  double re_ = 1, im_ = 0, flat_ = 0;
+  int turns_ = 0;
+};
 }  // namespace
 
 WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles) {
@@ -84,12 +117,15 @@ std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
 double WindingNumber::query(std::uint32_t id, const Vec3& q) const {
   const Node& n = nodes_[id];
   const Vec3 d = sub(n.centre, q);
-  const double dist = norm(d);
-  if (dist > kFarRatio * n.radius && dist > 0) return dot(n.area, d) / (dist * dist * dist);
+  const double d2 = dot(d, d), far = kFarRatio * n.radius;
+  if (d2 > far * far && d2 > 0) {
+    const double dist = std::sqrt(d2);
+    return dot(n.area, d) / (d2 * dist);
+  }
   if (n.left == 0) {
-    double s = 0;
-    for (std::uint32_t i = n.begin; i < n.end; ++i) s += solid_angle(tri_[order_[i]], q);
-    return s;
+    HalfAngleSum s;
+    for (std::uint32_t i = n.begin; i < n.end; ++i) s.add(half_angle(tri_[order_[i]], q));
+    return 2 * s.value();
   }
   return query(n.left, q) + query(n.right, q);
 }
