@@ -17,6 +17,7 @@
 #include "delaunay/predicates.hpp"
 #include "hmc/codec.hpp"
 #include "reconstruct/reconstruct.hpp"
+#include "reconstruct/tuning.hpp"
 #include "reconstruct/winding.hpp"
 #include "samples.hpp"
 #include "util/bytes.hpp"
@@ -724,4 +725,46 @@ TEST_CASE("winding numbers: exact near the triangles, 1 inside and 0 outside a c
   const double sign = ws({0, 0, 0}) > 0 ? 1 : -1;
   for (double r : {0.0, 0.5, 0.9, 0.97}) CHECK(std::abs(sign * ws({r * 0.6, r * 0.48, r * 0.64}) - 1) < 0.05);
   for (double r : {1.03, 1.2, 3.0, 50.0}) CHECK(std::abs(ws({r * 0.6, r * 0.48, r * 0.64})) < 0.05);
+}
+
+TEST_CASE("truth labels: winding numbers carried to a coarser level give the same labels") {
+  // A torus on the grid, its surface at the same points; the coarser level
+  // keeps two points in three.
+  const Mesh m = samples::torus(40, 16);
+  std::vector<GridPoint> fine;
+  std::vector<Vec3> surface_points;
+  for (const auto& p : m.points) {
+    GridPoint g;
+    for (int a = 0; a < 3; ++a) g[a] = static_cast<std::uint32_t>(std::lround(500 + 300 * p[a]));
+    fine.push_back(g);
+    surface_points.push_back({double(g[0]), double(g[1]), double(g[2])});
+  }
+  std::vector<GridPoint> coarse;
+  for (std::size_t i = 0; i < fine.size(); ++i)
+    if (i % 3 != 0) coarse.push_back(fine[i]);
+  std::sort(fine.begin(), fine.end());
+  std::sort(coarse.begin(), coarse.end());
+  const auto dt_fine = delaunay(fine), dt_coarse = delaunay(coarse);
+  const std::vector<Triangle> no_faces;
+
+  WindingCache cache;
+  const auto fine_labels = truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces, &cache);
+  CHECK(fine_labels == truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces));
+  CHECK(cache.entries.size() == dt_fine.tets.size());
+  // Tetrahedra the coarser level keeps: the cache answers for them.
+  std::size_t kept = 0;
+  for (const auto& t : dt_coarse.tets) {
+    std::array<std::uint32_t, 3> key{0, 0, 0};
+    for (auto v : t)
+      for (int a = 0; a < 3; ++a) key[a] += coarse[v][a];
+    kept += std::binary_search(cache.entries.begin(), cache.entries.end(), std::make_pair(key, 0.0),
+                               [](const auto& x, const auto& y) { return x.first < y.first; });
+  }
+  CHECK(kept > dt_coarse.tets.size() / 10);
+  WindingCache spoiled = cache;
+  const auto plain = truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces);
+  CHECK(truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces, &cache) == plain);
+  // The cache is read, not recomputed: wrong values give other labels.
+  for (auto& e : spoiled.entries) e.second = 1 - e.second;
+  CHECK(truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces, &spoiled) != plain);
 }

@@ -169,7 +169,8 @@ struct LossyTarget {
 // repair mend what makes the surface unsound.
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
-                         Fidelity fidelity, const LevelPlan* finest, const LossyTarget* lossy = nullptr) {
+                         Fidelity fidelity, const LevelPlan* finest, const LossyTarget* lossy = nullptr,
+                         WindingCache* winding = nullptr) {
   const bool coarser = finest != nullptr;
   const auto idx = lossy ? lossy->index : index_in(fine_points, plan.points);
   const std::vector<Vec3>& surface_gp = lossy ? lossy->positions : fine_gp;
@@ -180,7 +181,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
     if (g[0] != ~0u && g[1] != ~0u && g[2] != ~0u && g[0] != g[1] && g[1] != g[2] && g[0] != g[2]) faces.push_back(g);
   }
   TuneInput ti;
-  if (!surface.empty()) ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces);
+  if (!surface.empty()) ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, lossy ? nullptr : winding);
   if (kind == Kind::surface) {
     // Level indices: ascending (RCON gap-codes the list) and distinct. A
     // lossy level's points are not in the input's order.
@@ -422,6 +423,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   auto progress = [&](int level, double share) {
     if (options.progress) options.progress(level, std::min(1.0, (work_done + share) / work_total));
   };
+  WindingCache winding;  // the input surface's winding numbers, from one level to the next
   for (int k = 0; k < options.levels; ++k) {
     progress(k, 0);
     LevelPlan plan;
@@ -432,7 +434,8 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     Tetrahedralization dt;
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
     if (rep.kind != Kind::points)
-      plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity, k > 0 ? &plans.front() : nullptr);
+      plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity, k > 0 ? &plans.front() : nullptr,
+                          nullptr, &winding);
     if (more) {
       LevelMesh mesh;
       mesh.points = &plan.points;

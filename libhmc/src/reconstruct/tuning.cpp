@@ -290,7 +290,7 @@ std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, co
 
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
-                                       const std::vector<Triangle>& input_faces_on_points) {
+                                       const std::vector<Triangle>& input_faces_on_points, WindingCache* cache) {
   const std::size_t nt = dt.tets.size();
   WindingNumber wn(surface_points, surface);
   std::vector<double> w(nt);
@@ -311,12 +311,35 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
     order[t] = key << kIndexBits | t;
   }
   if (reorder) radix_sort(order, 64);
+  // Four times the centroid: exact integers (coordinates are below 2^21).
+  auto key_of = [&](std::size_t t) {
+    std::array<std::uint32_t, 3> key{0, 0, 0};
+    for (auto v : dt.tets[t])
+      for (int a = 0; a < 3; ++a) key[a] += points[v][a];
+    return key;
+  };
+  using Entry = std::pair<std::array<std::uint32_t, 3>, double>;
+  const auto by_key = [](const Entry& e, const std::array<std::uint32_t, 3>& key) { return e.first < key; };
   for (const std::uint64_t k : order) {
     const std::size_t t = reorder ? static_cast<std::size_t>(k & ((std::uint64_t{1} << kIndexBits) - 1)) : static_cast<std::size_t>(k);
+    if (cache) {
+      const auto key = key_of(t);
+      const auto it = std::lower_bound(cache->entries.begin(), cache->entries.end(), key, by_key);
+      if (it != cache->entries.end() && it->first == key) {
+        w[t] = it->second;
+        continue;
+      }
+    }
     Vec3 c{0, 0, 0};
     for (auto v : dt.tets[t])
       for (int a = 0; a < 3; ++a) c[a] += 0.25 * points[v][a];
     w[t] = std::abs(wn(c));
+  }
+  if (cache) {
+    std::vector<Entry> next(nt);
+    for (std::size_t t = 0; t < nt; ++t) next[t] = {key_of(t), w[t]};
+    std::sort(next.begin(), next.end());
+    cache->entries.swap(next);
   }
   std::vector<std::uint8_t> label(nt);
   std::vector<std::uint8_t> sure(nt);

@@ -26,9 +26,20 @@ struct GridMesh {
 /// tetrahedra on the surface settled by which of their faces are input
 /// faces. `surface` is evaluated at `surface_points` (grid units), which may
 /// be a finer level's points than the tetrahedralized ones.
+///
+/// `cache`, when given, carries winding numbers from one call to the next
+/// for the same surface: a tetrahedron's centroid, hence its winding
+/// number, depends only on its four points, and a coarser level keeps many
+/// of a finer level's tetrahedra (on the shared models 38-69 %). It must
+/// not be shared between calls with different surfaces.
+struct WindingCache {
+  /// (4 × centroid in grid units, |winding number|), sorted by centroid.
+  std::vector<std::pair<std::array<std::uint32_t, 3>, double>> entries;
+};
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
-                                       const std::vector<Triangle>& input_faces_on_points);
+                                       const std::vector<Triangle>& input_faces_on_points,
+                                       WindingCache* cache = nullptr);
 
 /// Components (of faces joined by edges) and Euler characteristic of a
 /// triangle list.
