@@ -833,6 +833,14 @@ Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedr
   const auto scale = local_scale(points, dt, p.scale_rank);
   auto inside = rule_labels(points, dt, scale, p);
   if (p.repair) repair_labels(dt, kind, inside);
+  return reconstruct_from_labels(dt, kind, p, std::move(inside));
+}
+
+Reconstruction reconstruct_from_labels(const Tetrahedralization& dt, Kind kind, const ReconParams& p,
+                                       std::vector<std::uint8_t> inside) {
+  if (kind == Kind::points) return {};
+  if (p.border_delta) fail(Status::internal_error, "reconstruct: the border list is not resolved");
+  if (inside.size() != dt.tets.size()) fail(Status::internal_error, "reconstruct: one label per tetrahedron needed");
   apply_toggles(dt, p, inside);
   if (!p.drops.empty() && p.drops.back() / 4 >= inside.size())
     fail(Status::bad_layer, "RCON: dropped face " + std::to_string(p.drops.back()) + " does not exist");

@@ -145,6 +145,12 @@ void resolve_border(ReconParams& p, const std::vector<std::uint32_t>& inherited)
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
                            const ReconParams& p);
 
+/// The end of reconstruct(): toggles (11.5), drops and extraction (11.6),
+/// on the labels of the rule after peeling and, when p.repair, the repair
+/// (a caller that has them, as the encoder's tuning does, skips the rest).
+Reconstruction reconstruct_from_labels(const Tetrahedralization& dt, Kind kind, const ReconParams& p,
+                                       std::vector<std::uint8_t> inside);
+
 /// Exact squared distance of two grid points (below 3·2^42).
 inline std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {
   std::uint64_t s = 0;

@@ -412,8 +412,10 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // What parameters p leave to correct: the rule's labels that differ from
   // the truth or, on a coarser level that relies on the decoder's repair,
   // what the repair cannot mend.
-  auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale) {
-    auto labels = rule_labels(points, dt, scale, p);
+  // labels: the rule's (after the repair, when p sets it), kept for the
+  // parameters tuning chooses.
+  auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale, std::vector<std::uint8_t>& labels) {
+    labels = rule_labels(points, dt, scale, p);
     std::uint64_t m = 0;
     if (p.repair) {
       repair_labels(dt, kind, labels);
@@ -425,6 +427,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   };
   std::uint64_t best_bits = ~std::uint64_t{0};
   std::uint64_t best_mismatch = 0;
+  std::vector<std::uint8_t> trial, best_labels;
   // A surface vertex has about six surface neighbours; a volume's boundary
   // vertex more Delaunay edges inside the solid.
   const std::vector<std::uint32_t> ranks = kind == Kind::surface ? std::vector<std::uint32_t>{6}
@@ -467,12 +470,13 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       return static_cast<std::uint64_t>(bits) + 8 * p.multipliers.size();
     };
     auto consider = [&](const ReconParams& p, std::uint64_t class_bits) {
-      const std::uint64_t mism = cost(p, scale);
+      const std::uint64_t mism = cost(p, scale, trial);
       const std::uint64_t bits = class_bits + list_bits(mism, nt);
       if (bits >= best_bits) return false;
       best_bits = bits;
       best_mismatch = mism;
       best = p;
+      best_labels.swap(trial);
       return true;
     };
     // Equal shares first: 1, 2, 4, 8 or 16 classes.
@@ -540,10 +544,11 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       if (in.approximate) break;  // coarser levels: the repair does better, at no cost
       ReconParams p = best;
       p.filters[static_cast<std::size_t>(id)] = threshold;
-      const std::uint64_t c = cost(p, scale);
+      const std::uint64_t c = cost(p, scale, trial);
       if (c < current) {
         current = c;
         best = p;
+        best_labels.swap(trial);
       }
     }
     best_mismatch = current;
@@ -554,7 +559,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     const double tolerance = fidelity == Fidelity::exact ? -1.0
                              : in.shape_tolerance >= 0 ? in.shape_tolerance
                                                        : 1e-3 * bbox_diagonal(points);
-    const auto rule = rule_labels(points, dt, local_scale(points, dt, best.scale_rank), best);
+    const auto rule = best_labels;  // rule_labels() for best, without the repair
     auto labels = rule;
     std::vector<std::uint8_t> toggled(nt, 0);
     for (std::size_t t = 0; t < nt; ++t)
@@ -627,6 +632,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   if (report) {
     report->mismatches_before_toggles = best_mismatch;
     report->side_bits_estimate = best_bits;
+    report->labels = std::move(best_labels);
   }
   return best;
 }

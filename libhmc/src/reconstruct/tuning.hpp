@@ -53,6 +53,10 @@ std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, co
 struct TuningReport {
   std::uint64_t mismatches_before_toggles = 0;
   std::uint64_t side_bits_estimate = 0;
+  /// The rule's labels for the chosen parameters (after the repair when
+  /// they set it), before toggles, for reconstruct_from_labels(); empty
+  /// when tuning had nothing to tune.
+  std::vector<std::uint8_t> labels;
 };
 
 /// What the encoder knows about the input, on the level's points.
