@@ -28,13 +28,20 @@ std::vector<std::uint64_t> limits(const std::vector<std::uint64_t>& scale, const
   return lim;
 }
 
-bool candidate(const std::vector<GridPoint>& pts, const std::vector<std::uint64_t>& lim,
-               const std::array<std::uint32_t, 3>& f) {
-  for (int i = 0; i < 3; ++i) {
-    const std::uint32_t u = f[i], v = f[(i + 1) % 3];
-    if (256 * dist2(pts[u], pts[v]) > std::min(lim[u], lim[v])) return false;
-  }
-  return true;
+// Candidate flags of the four faces of tetrahedron t (bit k: the face
+// opposite vertex k): a face is a candidate when each of its edges (u, v)
+// has 256·|uv|² <= min(lim[u], lim[v]). Each of the six edges is tested
+// once and shared by its two faces.
+unsigned candidate_faces(const std::vector<GridPoint>& pts, const std::vector<std::uint64_t>& lim,
+                         const std::array<std::uint32_t, 4>& t) {
+  unsigned faces = 0xF;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) {
+      const std::uint32_t u = t[static_cast<std::size_t>(i)], v = t[static_cast<std::size_t>(j)];
+      // The edge lies on the faces opposite the other two vertices.
+      if (256 * dist2(pts[u], pts[v]) > std::min(lim[u], lim[v])) faces &= (1u << i) | (1u << j);
+    }
+  return faces;
 }
 
 __extension__ typedef unsigned __int128 U128;
@@ -570,8 +577,10 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   std::vector<std::uint8_t> inside(nt, 1);
   // Candidate flags per (tet, local face), computed once.
   std::vector<std::uint8_t> cand(nt * 4);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k) cand[t * 4 + static_cast<std::size_t>(k)] = candidate(points, lim, face_of(dt, t, k));
+  for (std::size_t t = 0; t < nt; ++t) {
+    const unsigned faces = candidate_faces(points, lim, dt.tets[t]);
+    for (int k = 0; k < 4; ++k) cand[t * 4 + static_cast<std::size_t>(k)] = (faces >> k) & 1u;
+  }
   bool any_filter = false;
   for (auto f : p.filters) any_filter |= f != 0;
   if (any_filter) apply_filters(points, dt, scale, p, cand);
