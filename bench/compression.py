@@ -7,7 +7,8 @@ For every shared model at q = 12: bits per point of HMC with 4 levels and with
 side information), Draco's point-cloud and mesh coders measured here, the
 anchors of the issue, and the time and peak memory of encoding, decoding and
 one canonical Delaunay of the finest level (the ratio base); then 1 million
-generated points decoded by hmc (points only) and by draco_decoder. Writes
+generated points decoded by hmc (points only) and by draco_decoder, in
+alternation (the bar reads the median of the paired time ratios). Writes
 bench/results/compression.md and PNG plots in bench/results/compression/.
 
 usage: bench/compression.py [--build build] [--repeat 3] [--budget 40]
