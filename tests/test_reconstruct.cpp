@@ -754,10 +754,11 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
   // Tetrahedra the coarser level keeps: the cache answers for them.
   std::size_t kept = 0;
   for (const auto& t : dt_coarse.tets) {
-    std::array<std::uint32_t, 3> key{0, 0, 0};
+    std::uint64_t key[3] = {0, 0, 0};
     for (auto v : t)
       for (int a = 0; a < 3; ++a) key[a] += coarse[v][a];
-    kept += std::binary_search(cache.entries.begin(), cache.entries.end(), std::make_pair(key, 0.0),
+    const std::uint64_t packed = key[0] << (2 * cache.field) | key[1] << cache.field | key[2];
+    kept += std::binary_search(cache.entries.begin(), cache.entries.end(), std::make_pair(packed, 0.0),
                                [](const auto& x, const auto& y) { return x.first < y.first; });
   }
   CHECK(kept > dt_coarse.tets.size() / 10);
@@ -767,4 +768,18 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
   // The cache is read, not recomputed: wrong values give other labels.
   for (auto& e : spoiled.entries) e.second = 1 - e.second;
   CHECK(truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces, &spoiled) != plain);
+
+  // Coordinates of 20 bits: three keys do not fit in 64 bits, so nothing is
+  // cached, and a cache of other keys is not read.
+  std::vector<GridPoint> big = fine;
+  std::vector<Vec3> big_surface = surface_points;
+  for (auto& g : big)
+    for (auto& c : g) c <<= 10;
+  for (auto& p : big_surface)
+    for (auto& c : p) c *= 1024;
+  const auto dt_big = delaunay(big);
+  WindingCache big_cache = cache;
+  CHECK(truth_labels(big, dt_big, big_surface, m.triangles, no_faces, &big_cache) ==
+        truth_labels(big, dt_big, big_surface, m.triangles, no_faces));
+  CHECK(big_cache.entries.empty());
 }

@@ -311,19 +311,25 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
     order[t] = key << kIndexBits | t;
   }
   if (reorder) radix_sort(order, 64);
-  // Four times the centroid: exact integers (coordinates are below 2^21).
+  // The key of a tetrahedron: four times its centroid, integers below
+  // 2^(b+2) for coordinates below 2^b, packed into 64 bits when three fit.
+  int b = 0;
+  while (b < 32 && (any >> b) != 0) ++b;
+  const int field = b + 2;
+  const bool use_cache = cache && 3 * field <= 64;
+  if (cache && cache->field != field) cache->entries.clear();  // keys packed otherwise
   auto key_of = [&](std::size_t t) {
-    std::array<std::uint32_t, 3> key{0, 0, 0};
+    std::uint64_t sum[3] = {0, 0, 0};
     for (auto v : dt.tets[t])
-      for (int a = 0; a < 3; ++a) key[a] += points[v][a];
-    return key;
+      for (int a = 0; a < 3; ++a) sum[a] += points[v][a];
+    return sum[0] << (2 * field) | sum[1] << field | sum[2];
   };
-  using Entry = std::pair<std::array<std::uint32_t, 3>, double>;
-  const auto by_key = [](const Entry& e, const std::array<std::uint32_t, 3>& key) { return e.first < key; };
+  using Entry = std::pair<std::uint64_t, double>;
+  const auto by_key = [](const Entry& e, std::uint64_t key) { return e.first < key; };
   for (const std::uint64_t k : order) {
     const std::size_t t = reorder ? static_cast<std::size_t>(k & ((std::uint64_t{1} << kIndexBits) - 1)) : static_cast<std::size_t>(k);
-    if (cache) {
-      const auto key = key_of(t);
+    if (use_cache && !cache->entries.empty()) {
+      const std::uint64_t key = key_of(t);
       const auto it = std::lower_bound(cache->entries.begin(), cache->entries.end(), key, by_key);
       if (it != cache->entries.end() && it->first == key) {
         w[t] = it->second;
@@ -336,10 +342,13 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
     w[t] = std::abs(wn(c));
   }
   if (cache) {
-    std::vector<Entry> next(nt);
-    for (std::size_t t = 0; t < nt; ++t) next[t] = {key_of(t), w[t]};
-    std::sort(next.begin(), next.end());
-    cache->entries.swap(next);
+    std::vector<Entry>().swap(cache->entries);  // this level's replace the previous level's
+    cache->field = field;
+    if (use_cache) {
+      cache->entries.resize(nt);
+      for (std::size_t t = 0; t < nt; ++t) cache->entries[t] = {key_of(t), w[t]};
+      std::sort(cache->entries.begin(), cache->entries.end());
+    }
   }
   std::vector<std::uint8_t> label(nt);
   std::vector<std::uint8_t> sure(nt);

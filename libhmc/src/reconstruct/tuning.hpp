@@ -33,8 +33,12 @@ struct GridMesh {
 /// of a finer level's tetrahedra (on the shared models 38-69 %). It must
 /// not be shared between calls with different surfaces.
 struct WindingCache {
-  /// (4 × centroid in grid units, |winding number|), sorted by centroid.
-  std::vector<std::pair<std::array<std::uint32_t, 3>, double>> entries;
+  /// Bits per axis of the packed keys: 2 more than the coordinates need.
+  int field = 0;
+  /// (4 × centroid in grid units, x·2^(2·field) + y·2^field + z;
+  /// |winding number|), sorted by key. Empty when three fields do not fit
+  /// in 64 bits (coordinates of 20 bits and more).
+  std::vector<std::pair<std::uint64_t, double>> entries;
 };
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
