@@ -30,8 +30,9 @@ struct GridMesh {
 /// `cache`, when given, carries winding numbers from one call to the next
 /// for the same surface: a tetrahedron's centroid, hence its winding
 /// number, depends only on its four points, and a coarser level keeps many
-/// of a finer level's tetrahedra (on the shared models 38-69 %). It must
-/// not be shared between calls with different surfaces.
+/// of a finer level's tetrahedra (38-69 % on the Stanford bunny and
+/// hand_tetgen at 4 levels). It must not be shared between calls with
+/// different surfaces.
 struct WindingCache {
   /// Bits per axis of the packed keys: 2 more than the coordinates need.
   int field = 0;

@@ -57,7 +57,7 @@ class HalfAngleSum {
     // Only the argument matters: rescale before the magnitude could leave
     // the range of doubles.
     const double size = std::max(std::fabs(nr), std::fabs(ni));
-    if (size > 1e100 || size < 1e-100) re_ /= size, im_ /= size;
+    if (size > 1e100 || (size < 1e-100 && size > 0)) re_ /= size, im_ /= size;
   }
   double value() const { return std::atan2(im_, re_) + 2 * kPi * turns_ + flat_; }
 
@@ -65,6 +65,7 @@ class HalfAngleSum {
   double re_ = 1, im_ = 0, flat_ = 0;
   int turns_ = 0;
 };
+
 }  // namespace
 
 WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles) {
