@@ -783,3 +783,41 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
         truth_labels(big, dt_big, big_surface, m.triangles, no_faces));
   CHECK(big_cache.entries.empty());
 }
+
+TEST_CASE("boundary faces of tetrahedra: the faces only one of them has, facing out") {
+  // Two tetrahedra sharing the face (1, 2, 3), one of them negatively
+  // oriented: six boundary faces, each counter-clockwise seen from outside.
+  const std::vector<Vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  const std::vector<Tetrahedron> tets = {{0, 1, 2, 3}, {4, 2, 1, 3}};
+  const auto faces = boundary_faces(p, tets);
+  REQUIRE(faces.size() == 6);
+  std::set<std::array<std::uint32_t, 3>> seen;
+  Vec3 centre{0, 0, 0};
+  for (const auto& q : p)
+    for (int a = 0; a < 3; ++a) centre[a] += q[a] / 5;
+  for (const auto& f : faces) {
+    auto s = f;
+    std::sort(s.begin(), s.end());
+    CHECK(s != std::array<std::uint32_t, 3>{1, 2, 3});
+    seen.insert(s);
+    Vec3 u, v, c;
+    for (int a = 0; a < 3; ++a) {
+      u[a] = p[f[1]][a] - p[f[0]][a];
+      v[a] = p[f[2]][a] - p[f[0]][a];
+      c[a] = p[f[0]][a] - centre[a];
+    }
+    const Vec3 n{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    CHECK(n[0] * c[0] + n[1] * c[1] + n[2] * c[2] > 0);  // the union is convex: outward from its centre
+  }
+  CHECK(seen.size() == 6);
+  // In ascending order of their vertex sets.
+  for (std::size_t i = 1; i < faces.size(); ++i) {
+    auto a = faces[i - 1], b = faces[i];
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    CHECK(a < b);
+  }
+  // A face used three times is not a boundary face either.
+  const auto three = boundary_faces(p, {{0, 1, 2, 3}, {4, 2, 1, 3}, {1, 2, 3, 0}});
+  CHECK(three.size() == 3);
+}

@@ -7,6 +7,7 @@
 #include "delaunay/predicates.hpp"
 #include "hierarchy/hierarchy.hpp"
 #include "hierarchy/internal.hpp"
+#include "util/single_faces.hpp"
 
 namespace hmc::detail {
 
@@ -21,34 +22,20 @@ std::vector<std::array<std::uint32_t, 3>> boundary_faces(const LevelMesh& m, Kin
     for (const auto& t : m.triangles)
       if (usable(t, n)) out.push_back(t);
   } else if (kind == Kind::volume) {
-    struct Face {
-      std::array<std::uint32_t, 3> sorted;
-      std::array<std::uint32_t, 3> oriented;
-    };
-    std::vector<Face> faces;
+    std::vector<std::array<std::uint32_t, 3>> faces;
     faces.reserve(m.tetrahedra.size() * 4);
     for (const auto& t : m.tetrahedra) {
       if (!usable(t, n)) continue;
       const auto& p = *m.points;
       const bool negative = orient3d(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) < 0;
       for (int k = 0; k < 4; ++k) {
-        Face f;
-        for (int i = 0; i < 3; ++i) f.oriented[i] = t[kFaceVertices[k][i]];
-        if (negative) std::swap(f.oriented[1], f.oriented[2]);
-        f.sorted = f.oriented;
-        std::sort(f.sorted.begin(), f.sorted.end());
+        std::array<std::uint32_t, 3> f;
+        for (int i = 0; i < 3; ++i) f[i] = t[kFaceVertices[k][i]];
+        if (negative) std::swap(f[1], f[2]);
         faces.push_back(f);
       }
     }
-    std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
-      return a.sorted != b.sorted ? a.sorted < b.sorted : a.oriented < b.oriented;
-    });
-    for (std::size_t i = 0; i < faces.size();) {
-      std::size_t j = i + 1;
-      while (j < faces.size() && faces[j].sorted == faces[i].sorted) ++j;
-      if (j == i + 1) out.push_back(faces[i].oriented);
-      i = j;
-    }
+    out = single_faces(faces);
   }
   if (on_boundary_face)
     for (const auto& f : out)

@@ -3,7 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+
+#include "util/single_faces.hpp"
 
 namespace hmc::detail {
 
@@ -137,7 +138,8 @@ double WindingNumber::operator()(const Vec3& q) const {
 }
 
 std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std::vector<Tetrahedron>& tets) {
-  std::map<std::array<std::uint32_t, 3>, std::pair<int, Triangle>> faces;
+  std::vector<Triangle> faces;
+  faces.reserve(tets.size() * 4);
   for (const auto& t : tets) {
     const Vec3 u = sub(points[t[1]], points[t[0]]), v = sub(points[t[2]], points[t[0]]),
                w = sub(points[t[3]], points[t[0]]);
@@ -148,17 +150,10 @@ std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std:
     for (const auto& f : fv) {
       Triangle tri{t[f[0]], t[f[1]], t[f[2]]};
       if (!positive) std::swap(tri[1], tri[2]);
-      std::array<std::uint32_t, 3> key{tri[0], tri[1], tri[2]};
-      std::sort(key.begin(), key.end());
-      auto& e = faces[key];
-      ++e.first;
-      e.second = tri;
+      faces.push_back(tri);
     }
   }
-  std::vector<Triangle> out;
-  for (const auto& [k, e] : faces)
-    if (e.first == 1) out.push_back(e.second);
-  return out;
+  return single_faces(faces);
 }
 
 }  // namespace hmc::detail
