@@ -85,10 +85,12 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
                    const std::vector<std::uint64_t>& scale, const ReconParams& p, std::vector<std::uint8_t>& cand) {
   const auto& th = p.filters;
   const std::size_t nt = dt.tets.size();
-  // Unique faces: sort (sorted triple, slot) and give each face an id.
+  // Unique faces: sort (sorted triple, slot) and give each face an id. The
+  // triple (a, b, c) is kept as (a·2^32 + b, c): integer comparisons.
   struct Slot {
-    std::array<std::uint32_t, 3> key;
-    std::uint32_t slot;
+    std::uint64_t ab;
+    std::uint32_t c, slot;
+    bool same_face(const Slot& o) const { return ab == o.ab && c == o.c; }
   };
   std::vector<Slot> slots;
   slots.reserve(nt * 4);
@@ -98,18 +100,19 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       if (!cand[s]) continue;
       auto f = face_of(dt, t, k);
       std::sort(f.begin(), f.end());
-      slots.push_back({f, static_cast<std::uint32_t>(s)});
+      slots.push_back({std::uint64_t{f[0]} << 32 | f[1], f[2], static_cast<std::uint32_t>(s)});
     }
   std::sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
-    return a.key != b.key ? a.key < b.key : a.slot < b.slot;
+    return a.ab != b.ab ? a.ab < b.ab : a.c != b.c ? a.c < b.c : a.slot < b.slot;
   });
   std::size_t unique = 0;
-  for (std::size_t i = 0; i < slots.size(); ++i) unique += i == 0 || slots[i].key != slots[i - 1].key;
+  for (std::size_t i = 0; i < slots.size(); ++i) unique += i == 0 || !slots[i].same_face(slots[i - 1]);
   std::vector<std::array<std::uint32_t, 3>> faces;
   faces.reserve(unique);
   std::vector<std::uint32_t> face_of_slot(slots.size()), slot_ids(slots.size());
   for (std::size_t i = 0; i < slots.size(); ++i) {
-    if (i == 0 || slots[i].key != slots[i - 1].key) faces.push_back(slots[i].key);
+    if (i == 0 || !slots[i].same_face(slots[i - 1]))
+      faces.push_back({static_cast<std::uint32_t>(slots[i].ab >> 32), static_cast<std::uint32_t>(slots[i].ab), slots[i].c});
     face_of_slot[i] = static_cast<std::uint32_t>(faces.size() - 1);
     slot_ids[i] = slots[i].slot;
   }
