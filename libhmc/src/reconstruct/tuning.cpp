@@ -441,8 +441,9 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // vertex more Delaunay edges inside the solid.
   const std::vector<std::uint32_t> ranks = kind == Kind::surface ? std::vector<std::uint32_t>{6}
                                                                   : std::vector<std::uint32_t>{6, 10};
+  std::vector<std::uint64_t> best_scale;  // local_scale() at best.scale_rank
   for (std::uint32_t rank : ranks) {
-    const auto scale = local_scale(points, dt, rank);
+    auto scale = local_scale(points, dt, rank);
     // Multiplier each vertex needs, in 1/256 units, capped to the table range.
     std::vector<std::uint32_t> ratio(n, 1);
     for (std::size_t v = 0; v < n; ++v) {
@@ -541,11 +542,12 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
         best_splits = next;
       }
     }
+    if (best.scale_rank == rank) best_scale = std::move(scale);
   }
   // The thesis' filters (§2.3.2): keep each one that lowers the labels the
   // rule gets wrong (or, on coarser levels, the repairs it needs).
   {
-    const auto scale = local_scale(points, dt, best.scale_rank);
+    const auto& scale = best_scale;
     std::uint64_t current = best_mismatch;  // cost(best, scale), known from the search
     const std::pair<int, std::uint32_t> tries[] = {{kCircleRadius, 512}, {kEdgeRatio, 16},       {kDensity, 1024},
                                                    {kLone, 1},           {kNeighbourRadius, 4096}, {kNeighbourRatio, 32}};
