@@ -435,8 +435,8 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     Tetrahedralization dt;
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
     if (rep.kind != Kind::points)
-      plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity, k > 0 ? &plans.front() : nullptr,
-                          nullptr, &winding);
+      plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity,
+                          k > 0 ? &plans.front() : nullptr, nullptr, &winding);
     if (more) {
       LevelMesh mesh;
       mesh.points = &plan.points;

@@ -112,7 +112,8 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
   std::vector<std::uint32_t> face_of_slot(slots.size()), slot_ids(slots.size());
   for (std::size_t i = 0; i < slots.size(); ++i) {
     if (i == 0 || !slots[i].same_face(slots[i - 1]))
-      faces.push_back({static_cast<std::uint32_t>(slots[i].ab >> 32), static_cast<std::uint32_t>(slots[i].ab), slots[i].c});
+      faces.push_back(
+          {static_cast<std::uint32_t>(slots[i].ab >> 32), static_cast<std::uint32_t>(slots[i].ab), slots[i].c});
     face_of_slot[i] = static_cast<std::uint32_t>(faces.size() - 1);
     slot_ids[i] = slots[i].slot;
   }
