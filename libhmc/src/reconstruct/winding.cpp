@@ -77,6 +77,11 @@ WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<
   nodes_.reserve(2 * tri_.size() / kLeafSize + 2);
   nodes_.push_back({});  // index 0 is never a child, so left == 0 marks a leaf
   if (!tri_.empty()) build(0, static_cast<std::uint32_t>(tri_.size()));
+  // The triangles in tree order, so that a leaf's lie side by side.
+  std::vector<std::array<Vec3, 3>> in_order(tri_.size());
+  for (std::size_t i = 0; i < order_.size(); ++i) in_order[i] = tri_[order_[i]];
+  tri_.swap(in_order);
+  std::vector<std::uint32_t>().swap(order_);
 }
 
 std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
@@ -126,7 +131,7 @@ double WindingNumber::query(std::uint32_t id, const Vec3& q) const {
   }
   if (n.left == 0) {
     HalfAngleSum s;
-    for (std::uint32_t i = n.begin; i < n.end; ++i) s.add(half_angle(tri_[order_[i]], q));
+    for (std::uint32_t i = n.begin; i < n.end; ++i) s.add(half_angle(tri_[i], q));
     return 2 * s.value();
   }
   return query(n.left, q) + query(n.right, q);

@@ -27,14 +27,14 @@ class WindingNumber {
     Vec3 centre{};           // area-weighted centroid
     Vec3 area{};             // sum of area vectors (half cross products)
     double radius = 0;       // bounds every triangle vertex around centre
-    std::uint32_t begin = 0, end = 0;  // range in order_ (leaf) ...
+    std::uint32_t begin = 0, end = 0;  // range in tri_ (leaf) ...
     std::uint32_t left = 0, right = 0; // ... or children (left != 0)
   };
   std::uint32_t build(std::uint32_t begin, std::uint32_t end);
   double query(std::uint32_t node, const Vec3& q) const;
 
-  std::vector<std::array<Vec3, 3>> tri_;
-  std::vector<std::uint32_t> order_;
+  std::vector<std::array<Vec3, 3>> tri_;  // in tree order once built
+  std::vector<std::uint32_t> order_;      // tri_ indices in tree order, while building
   std::vector<Node> nodes_;
 };
 
