@@ -8,6 +8,20 @@
 
 namespace hmc::cli {
 
+namespace {
+
+// REFN coders (spec 8A).
+const char* refinement_coder_name(int coder) {
+  switch (coder) {
+    case 0: return "conditional octree";
+    case 1: return "anchored VQ (lossy)";
+    case 2: return "conditional octree, plane contexts";
+    default: return "unknown";
+  }
+}
+
+}  // namespace
+
 int cmd_info(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json"}, {});
   if (!a.ok() || a.positional().size() != 1) {
@@ -68,7 +82,7 @@ int cmd_info(int argc, char** argv) {
                 static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
                 static_cast<unsigned long long>(l.stream_bytes),
                 8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points),
-                i == 0 ? "octree" : l.coder == 1 ? "anchored VQ (lossy)" : l.coder == 0 ? "conditional octree" : l.coder == 2 ? "conditional octree, plane contexts" : "unknown");
+                i == 0 ? "octree" : refinement_coder_name(l.coder));
   }
   if (s.truncated) std::printf("\nwarning: %s\n", s.warning.c_str());
   return kOk;

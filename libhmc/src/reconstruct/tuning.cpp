@@ -570,7 +570,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     const double tolerance = fidelity == Fidelity::exact ? -1.0
                              : in.shape_tolerance >= 0 ? in.shape_tolerance
                                                        : 1e-3 * bbox_diagonal(points);
-    const auto rule = best_labels;  // rule_labels() for best, without the repair
+    const auto& rule = best_labels;  // rule_labels() for best, without the repair
     auto labels = rule;
     std::vector<std::uint8_t> toggled(nt, 0);
     for (std::size_t t = 0; t < nt; ++t)
