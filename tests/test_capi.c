@@ -295,6 +295,51 @@ static void test_streaming(size_t piece) {
   hmc_free(NULL, bytes);
 }
 
+/* Only the finest decoded level rebuilt: the same triangles as a full
+   decode; coarser levels have none; a cut stream's last level is rebuilt
+   at hmc_decoder_finish(). */
+static void test_rebuild_finest(void) {
+  size_t size = 0, lvl;
+  uint8_t *bytes = encode_torus(40, 16, 4, &size);
+  hmc_decoder *whole = hmc_decoder_create(NULL), *d = hmc_decoder_create(NULL), *cut = hmc_decoder_create(NULL);
+  hmc_level_info a, b;
+  uint32_t *t1, *t2;
+  size_t u1, u2;
+  CHECK_STATUS(hmc_decoder_set_rebuild_coarser_levels(NULL, 0), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_decoder_decode(whole, bytes, size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_set_rebuild_coarser_levels(d, 0), HMC_OK);
+  CHECK_STATUS(hmc_decoder_decode(d, bytes, size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_set_rebuild_coarser_levels(d, 1), HMC_INVALID_ARGUMENT);
+  CHECK(hmc_decoder_level_count(d) == 4);
+  for (lvl = 0; lvl < 4; ++lvl) {
+    CHECK_STATUS(hmc_decoder_level_info(d, lvl, &a), HMC_OK);
+    CHECK_STATUS(hmc_decoder_level_info(whole, lvl, &b), HMC_OK);
+    CHECK(a.point_count == b.point_count && b.triangle_count > 0);
+    CHECK(a.triangle_count == (lvl == 3 ? b.triangle_count : 0));
+  }
+  CHECK_STATUS(hmc_decoder_level_triangles(d, 3, &t1, &u1), HMC_OK);
+  CHECK_STATUS(hmc_decoder_level_triangles(whole, 3, &t2, &u2), HMC_OK);
+  CHECK(u1 == u2 && memcmp(t1, t2, 3 * u1 * sizeof *t1) == 0);
+  hmc_free(NULL, t1);
+  hmc_free(NULL, t2);
+  /* Cut after level 2 (the second level sent): that level is rebuilt when the data ends. */
+  CHECK_STATUS(hmc_decoder_level_info(whole, 1, &b), HMC_OK);
+  CHECK_STATUS(hmc_decoder_set_rebuild_coarser_levels(cut, 0), HMC_OK);
+  CHECK_STATUS(hmc_decoder_feed(cut, bytes, (size_t)b.stream_bytes), HMC_OK);
+  CHECK_STATUS(hmc_decoder_level_info(cut, 1, &a), HMC_OK);
+  CHECK(a.triangle_count == 0);
+  CHECK_STATUS(hmc_decoder_finish(cut), HMC_INCOMPLETE);
+  CHECK(hmc_decoder_level_count(cut) == 2);
+  CHECK_STATUS(hmc_decoder_level_info(cut, 1, &a), HMC_OK);
+  CHECK(a.triangle_count == b.triangle_count && a.triangle_count > 0);
+  CHECK_STATUS(hmc_decoder_level_info(cut, 0, &a), HMC_OK);
+  CHECK(a.triangle_count == 0);
+  hmc_decoder_destroy(cut);
+  hmc_decoder_destroy(d);
+  hmc_decoder_destroy(whole);
+  hmc_free(NULL, bytes);
+}
+
 static void test_truncation(void) {
   size_t size = 0;
   uint8_t *bytes = encode_torus(40, 16, 3, &size);
@@ -600,6 +645,7 @@ int main(void) {
   test_volume();
   for (i = 0; i < sizeof pieces / sizeof pieces[0]; ++i) test_streaming(pieces[i]);
   test_truncation();
+  test_rebuild_finest();
   test_errors();
   test_limits_and_misuse();
   test_allocator();

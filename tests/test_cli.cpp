@@ -57,6 +57,45 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   CHECK(r.out.find("\"kind\": \"surface\"") != std::string::npos);
 }
 
+TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each, with the same finest mesh") {
+  const auto dir = testgen::temp_dir("cli_rebuild");
+  REQUIRE(io::write_mesh(dir + "/torus.ply", samples::torus(40, 16)).ok());
+  auto r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/t.hmc") + " --levels 3");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " -o " + q(dir + "/one.ply") + " --json");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  auto count = [](const std::string& s, const std::string& what) {
+    std::size_t n = 0;
+    for (auto at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
+    return n;
+  };
+  CHECK(count(r.out, "\"rebuilt\": false") == 2);
+  CHECK(count(r.out, "\"rebuilt\": true") == 1);
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --all-levels " + q(dir + "/all") + " --json");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(count(r.out, "\"rebuilt\": true") == 3);
+  CHECK(slurp(dir + "/one.ply") == slurp(dir + "/all/level-0.ply"));
+  CHECK_FALSE(slurp(dir + "/one.ply").empty());
+  // The text table marks levels without connectivity.
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " -o " + q(dir + "/two.ply"));
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find(" - ") != std::string::npos);
+  // Without outputs the summary shows every level; --rebuild overrides.
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --json");
+  REQUIRE(r.code == 0);
+  CHECK(count(r.out, "\"rebuilt\": true") == 3);
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --json --rebuild finest");
+  REQUIRE(r.code == 0);
+  CHECK(count(r.out, "\"rebuilt\": false") == 2);
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " -o " + q(dir + "/three.ply") + " --json --rebuild all");
+  REQUIRE(r.code == 0);
+  CHECK(count(r.out, "\"rebuilt\": true") == 3);
+  CHECK(slurp(dir + "/three.ply") == slurp(dir + "/one.ply"));
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --rebuild some");
+  CHECK(r.code == 1);
+  CHECK(r.err.find("--rebuild") != std::string::npos);
+}
+
 TEST_CASE("dec writes binary coordinates as float32 only when that keeps the grid") {
   const auto dir = testgen::temp_dir("cli_coords");
   auto coords_of = [&](const std::string& ply) {

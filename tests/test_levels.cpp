@@ -152,6 +152,71 @@ TEST_CASE("finest_level stops at a coarser level") {
   CHECK_FALSE(d.value().truncated);
 }
 
+TEST_CASE("rebuilding only the finest decoded level gives it the same mesh and skips the others") {
+  // Closed and open surfaces (the open one's finer levels inherit the
+  // coarser level's border, which must be resolved through levels that are
+  // not rebuilt) and a volume.
+  struct Case {
+    const char* name;
+    Encoded e;
+  };
+  EncodeOptions vol;
+  vol.levels = 3;
+  vol.kind = Kind::volume;
+  auto v = encode(samples::random_ball(500, 5), vol);
+  REQUIRE(v.ok());
+  std::vector<Case> cases;
+  cases.push_back({"torus", encode_levels(samples::torus(40, 16), 4)});
+  cases.push_back({"open surface", encode_levels(samples::height_field(20, 0.15), 4)});
+  cases.push_back({"volume", std::move(v).value()});
+  for (const auto& [name, e] : cases) {
+    CAPTURE(name);
+    REQUIRE(e.levels.size() >= 3);
+    if (std::string(name) == "open surface") {
+      // At least one finer level inherits its border (RCON flag bit 3).
+      const auto view = parse_container(e.bytes.data(), e.bytes.size(), kEnd);
+      int inherits = 0;
+      for (const auto& c : view.chunks)
+        if (c.type == kRecon && c.length > 0 && (c.payload[0] & 8)) ++inherits;
+      REQUIRE(inherits > 0);
+    }
+    DecodeOptions finest;
+    finest.rebuild_coarser_levels = false;
+    // Every prefix that ends on a level boundary: its last level is rebuilt
+    // exactly as the encoder planned it, the coarser ones carry points only.
+    for (std::size_t i = 0; i < e.levels.size(); ++i) {
+      CAPTURE(i);
+      auto d = decode(e.bytes.data(), e.levels[i].stream_bytes, finest);
+      REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+      const auto& got = d.value().levels;
+      REQUIRE(got.size() == i + 1);
+      for (std::size_t j = 0; j <= i; ++j) {
+        CAPTURE(j);
+        CHECK(got[j].points == e.levels[j].points);
+        CHECK(got[j].rebuilt == (j == i));
+        if (j < i) CHECK((got[j].triangles.empty() && got[j].tetrahedra.empty()));
+      }
+      CHECK(got[i].triangles == e.levels[i].triangles);
+      CHECK(got[i].tetrahedra == e.levels[i].tetrahedra);
+      CHECK(got[i].triangles.size() + got[i].tetrahedra.size() > 0);
+    }
+    // A requested coarser level is the one rebuilt.
+    finest.finest_level = 1;
+    auto d = decode(e.bytes.data(), e.bytes.size(), finest);
+    REQUIRE(d.ok());
+    const std::size_t at = e.levels.size() - 2;  // level 1
+    REQUIRE(d.value().levels.size() == at + 1);
+    CHECK(d.value().finest().lod == 1);
+    CHECK(d.value().finest().rebuilt);
+    CHECK(d.value().finest().triangles == e.levels[at].triangles);
+    CHECK(d.value().finest().tetrahedra == e.levels[at].tetrahedra);
+    // The default rebuilds every level.
+    auto all = decode(e.bytes.data(), e.bytes.size());
+    REQUIRE(all.ok());
+    for (const auto& l : all.value().levels) CHECK(l.rebuilt);
+  }
+}
+
 TEST_CASE("stream structure errors around refinement layers") {
   const auto e = encode_levels(samples::uv_sphere(12, 24), 3);
   auto v = parse_container(e.bytes.data(), e.bytes.size(), kEnd);

@@ -127,6 +127,7 @@ void check_same(const Outcome& a, const Outcome& b, bool messages = true) {
     CHECK(x.levels[i].points == y.levels[i].points);
     CHECK(x.levels[i].triangles == y.levels[i].triangles);
     CHECK(x.levels[i].tetrahedra == y.levels[i].tetrahedra);
+    CHECK(x.levels[i].rebuilt == y.levels[i].rebuilt);
   }
 }
 
@@ -206,6 +207,16 @@ TEST_CASE("streaming with options: a coarser requested level, points only") {
     p.reconstruct = false;
     Pieces pieces{std::mt19937_64(9), 300};
     check_same(streamed(s.bytes.data(), s.bytes.size(), pieces, p), whole(s.bytes.data(), s.bytes.size(), p));
+    // Only the finest decoded level rebuilt: also on cut streams, where
+    // that level is known only when the data ends (finish()).
+    DecodeOptions f;
+    f.rebuild_coarser_levels = false;
+    check_stream_equivalence(s.bytes, f);
+    for (std::size_t n : chunk_boundaries(s.bytes)) {
+      CAPTURE(n);
+      Pieces cut{std::mt19937_64(n), 200};
+      check_same(streamed(s.bytes.data(), n, cut, f), whole(s.bytes.data(), n, f));
+    }
   }
 }
 

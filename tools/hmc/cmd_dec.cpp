@@ -38,7 +38,7 @@ bool float32_keeps_grid(const Mesh& m, double step) {
 int cmd_dec(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--points-only"},
          {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels", "--max-memory",
-          "--coords"});
+          "--coords", "--rebuild"});
   DecodeOptions opt;
   opt.finest_level = static_cast<int>(a.get_int("--level", 0, 0, 63));
   opt.limits.max_points = static_cast<std::uint64_t>(
@@ -48,8 +48,19 @@ int cmd_dec(int argc, char** argv) {
                               "--max-memory", static_cast<long long>(opt.limits.max_memory >> 20), 1, 1ll << 30))
                           << 20;
   opt.reconstruct = !a.flag("--points-only");
+  // Rebuild what is written or shown: one output file needs one level's
+  // connectivity, so the coarser levels' reconstructions (more than half
+  // the work of a multi-level stream) are skipped; the summary table and
+  // the per-level outputs show every level.
+  const std::string rebuild = a.get("--rebuild", "auto");
+  opt.rebuild_coarser_levels = rebuild == "all" || (rebuild == "auto" && ((!a.has("-o") && !a.has("--output")) ||
+                                                                          a.has("--all-levels") || a.has("--canonical")));
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
   const std::string coords = a.get("--coords", "auto");
+  if (a.ok() && rebuild != "auto" && rebuild != "all" && rebuild != "finest") {
+    std::fprintf(stderr, "hmc dec: --rebuild must be all or finest, not '%s'\n", rebuild.c_str());
+    return kUsage;
+  }
   if (a.ok() && coords != "auto" && coords != "float" && coords != "double") {
     std::fprintf(stderr, "hmc dec: --coords must be auto, float or double, not '%s'\n", coords.c_str());
     return kUsage;
@@ -57,8 +68,8 @@ int cmd_dec(int argc, char** argv) {
   if (!a.ok() || a.positional().size() != 1) {
     std::fprintf(stderr,
                  "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR [--ext EXT]] [--canonical DIR]\n"
-                 "                  [--coords auto|float|double] [--points-only] [--max-points N] [--max-levels N]\n"
-                 "                  [--max-memory MIB] [--json]\n",
+                 "                  [--coords auto|float|double] [--rebuild all|finest] [--points-only] [--max-points N]\n"
+                 "                  [--max-levels N] [--max-memory MIB] [--json]\n",
                  a.ok() ? "need one input stream" : a.error().c_str());
     return kUsage;
   }
@@ -128,6 +139,7 @@ int cmd_dec(int argc, char** argv) {
       j.key("level").value(l.lod).key("points").value(static_cast<std::uint64_t>(l.points.size()));
       j.key("triangles").value(static_cast<std::uint64_t>(l.triangles.size()));
       j.key("tetrahedra").value(static_cast<std::uint64_t>(l.tetrahedra.size()));
+      j.key("rebuilt").value(l.rebuilt);
       j.key("stream_bytes").value(l.stream_bytes);
       j.end_object();
     }
@@ -137,9 +149,14 @@ int cmd_dec(int argc, char** argv) {
     std::printf("%s: %s, q = %d, %d level(s) declared, %zu decoded in %.3f s\n", in.c_str(), kind_name(d.kind),
                 d.quantizer.bits, d.level_count(), d.levels.size(), secs);
     std::printf("%6s %10s %10s %10s %12s\n", "level", "points", "triangles", "tetrahedra", "stream bytes");
+    // "-": connectivity not rebuilt (points only, or a coarser level when
+    // only the finest one is written).
+    auto count = [&](const DecodedLevel& l, std::size_t v) {
+      return d.kind == Kind::points || l.rebuilt ? std::to_string(v) : std::string("-");
+    };
     for (const auto& l : d.levels)
-      std::printf("%6d %10zu %10zu %10zu %12llu\n", l.lod, l.points.size(), l.triangles.size(), l.tetrahedra.size(),
-                  static_cast<unsigned long long>(l.stream_bytes));
+      std::printf("%6d %10zu %10s %10s %12llu\n", l.lod, l.points.size(), count(l, l.triangles.size()).c_str(),
+                  count(l, l.tetrahedra.size()).c_str(), static_cast<unsigned long long>(l.stream_bytes));
   }
   return kOk;
 }

@@ -179,6 +179,10 @@ struct DecodedLevel {
   /// tetrahedra), in canonical order (spec "Reconstruction").
   std::vector<Triangle> triangles;
   std::vector<Tetrahedron> tetrahedra;
+  /// The connectivity was rebuilt (false for kind points, without
+  /// DecodeOptions::reconstruct, and for the coarser levels without
+  /// DecodeOptions::rebuild_coarser_levels).
+  bool rebuilt = false;
 };
 
 /// An encoded stream with its report.
@@ -226,6 +230,18 @@ struct DecodeOptions {
   /// Rebuild triangles or tetrahedra (surface and volume kinds). When false
   /// only points are decoded; side information is still validated.
   bool reconstruct = true;
+  /// With reconstruct: rebuild every decoded level (true, what a viewer that
+  /// shows each level as it arrives needs), or only the finest one decoded
+  /// (false). The coarser levels then come with points only, and their
+  /// Delaunay tetrahedralizations and reconstructions are skipped: on the
+  /// Stanford bunny's four-level stream (q = 12) that is less than half the
+  /// work. The finest level's connectivity is the same either way; the
+  /// coarser levels' side information is still parsed and checked, except
+  /// for what only a reconstruction can check (toggle and drop indices
+  /// against their tetrahedralization, spec section 10). When the stream
+  /// stops before the requested level, the last complete level is rebuilt
+  /// when the data ends (StreamDecoder: at finish()).
+  bool rebuild_coarser_levels = true;
 };
 
 

@@ -352,6 +352,20 @@ HMC_API hmc_status hmc_decoder_set_finest_level(hmc_decoder *decoder, int level)
  */
 HMC_API hmc_status hmc_decoder_set_reconstruct(hmc_decoder *decoder, int reconstruct);
 
+/**
+ * With reconstruction on, whether the coarser levels are rebuilt too, or
+ * only the finest level decoded (the requested one, or the last complete
+ * one of a cut stream, rebuilt when hmc_decoder_finish() is called). The
+ * coarser levels then have points only (no triangles or tetrahedra) and
+ * decoding does less than half the work on multi-level streams; the finest
+ * level's connectivity is the same. Only before decoding begins.
+ * @param decoder the decoder
+ * @param all     non-zero (the default): rebuild every level, as each one
+ *                completes; 0: only the finest one
+ * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT when decoding has begun
+ */
+HMC_API hmc_status hmc_decoder_set_rebuild_coarser_levels(hmc_decoder *decoder, int all);
+
 /** When a decoder fed in pieces reports a defect of the stream. */
 typedef enum hmc_error_order {
   /** At once: the hmc_decoder_feed() that meets the first defect in stream

@@ -211,6 +211,11 @@ class Decoder {
   }
   /// Rebuild triangles or tetrahedra, or only points (hmc_decoder_set_reconstruct()).
   Result<Done> set_reconstruct(bool on) { return check(hmc_decoder_set_reconstruct(h_.get(), on ? 1 : 0)); }
+  /// Rebuild every level, or only the finest decoded one
+  /// (hmc_decoder_set_rebuild_coarser_levels()).
+  Result<Done> set_rebuild_coarser_levels(bool all) {
+    return check(hmc_decoder_set_rebuild_coarser_levels(h_.get(), all ? 1 : 0));
+  }
 
   /// Decode a whole buffer (hmc_decoder_decode()).
   /// @param data the stream

@@ -331,6 +331,15 @@ hmc_status hmc_decoder_set_reconstruct(hmc_decoder* decoder, int reconstruct) {
   });
 }
 
+hmc_status hmc_decoder_set_rebuild_coarser_levels(hmc_decoder* decoder, int all) {
+  if (!decoder) return HMC_INVALID_ARGUMENT;
+  return guard(decoder->message, [&]() -> hmc_status {
+    if (decoder->begun()) return decoder->misuse("which levels to rebuild must be chosen before decoding begins");
+    decoder->options.rebuild_coarser_levels = all != 0;
+    return HMC_OK;
+  });
+}
+
 hmc_status hmc_decoder_set_error_order(hmc_decoder* decoder, int order) {
   if (!decoder) return HMC_INVALID_ARGUMENT;
   return guard(decoder->message, [&]() -> hmc_status {

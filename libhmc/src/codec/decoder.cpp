@@ -149,9 +149,18 @@ struct ChunkDecoder::State {
   // inserting only the added points. Counted in `memory` while kept.
   std::optional<Tetrahedralization> previous_dt;
   std::uint64_t previous_dt_bytes = 0;
-  // The last reconstructed level's border (resolved; indices of its points),
+  // The last decoded level's border (resolved; indices of its points),
   // which the next level's RCON may inherit (flag bit 3).
   std::vector<std::uint32_t> previous_border;
+  // Without DecodeOptions::rebuild_coarser_levels: the side information of
+  // the last level, whose reconstruction waits until it turns out to be the
+  // finest one decoded (at finish(), when the stream ends early).
+  std::optional<ReconParams> deferred;
+
+  // Rebuild `level`'s connectivity from its side information. `coarser` is
+  // the level decoded before it, if any: when its tetrahedralization was
+  // kept, this one is built from it.
+  void rebuild(DecodedLevel& level, const ReconParams& params, Kind kind, const DecodedLevel* coarser);
 
   // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
   // The kept tetrahedralization only saves time: it goes first, so that no
@@ -169,6 +178,36 @@ struct ChunkDecoder::State {
                                        std::to_string(max));
   }
 };
+
+void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params, Kind kind,
+                                  const DecodedLevel* coarser) {
+  const std::uint64_t n = level.points.size();
+  const std::string what =
+      "the reconstruction of level " + std::to_string(level.lod) + " (" + std::to_string(n) + " points)";
+  std::optional<Tetrahedralization> coarse = std::move(previous_dt);
+  previous_dt.reset();
+  memory -= previous_dt_bytes;
+  previous_dt_bytes = 0;
+  reserve(n * kPointBytes, what);
+  const std::uint64_t room = options.limits.max_memory - memory - n * kPointBytes;
+  // The previous level is the coarser one, and its points a subset.
+  Tetrahedralization dt = coarse && coarser && coarser->lod == level.lod + 1
+                              ? delaunay_refine(level.points, coarser->points, std::move(*coarse), room / kTetBytes)
+                              : delaunay(level.points, room / kTetBytes);
+  coarse.reset();
+  auto rec = reconstruct(level.points, dt, kind, params);
+  level.triangles = std::move(rec.triangles);
+  level.tetrahedra = std::move(rec.tetrahedra);
+  level.rebuilt = true;
+  memory += (level.triangles.size() + level.tetrahedra.size()) * kSimplexBytes;
+  const std::uint64_t keep = dt.tets.size() * 2 * sizeof(dt.tets[0]);
+  const std::uint64_t max = options.limits.max_memory;
+  if (level.lod > std::max(options.finest_level, 0) && memory <= max && keep <= max - memory) {
+    previous_dt = std::move(dt);
+    previous_dt_bytes = keep;
+    memory += keep;
+  }
+}
 
 ChunkDecoder::ChunkDecoder(const DecodeOptions& options) : s_(std::make_unique<State>(options)) {}
 ChunkDecoder::~ChunkDecoder() = default;
@@ -238,40 +277,21 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
     case ChunkWalker::Action::recon: {
       if (!pending) break;  // a level after the requested one
       ReconParams params = read_recon(c, pending->points.size(), walk.header->tables);
+      s_->deferred.reset();
       if (options.reconstruct) {
-        // Levels are reconstructed coarsest first, so the last one is the
-        // coarser level, whose points are a subset of these (none before
-        // the first: it inherits the empty set).
+        // Levels are decoded coarsest first, so the last one is the coarser
+        // level, whose points are a subset of these (none before the first:
+        // it inherits the empty set).
+        const DecodedLevel* coarser = out.levels.empty() ? nullptr : &out.levels.back();
         if (params.border_delta)
-          resolve_border(params, out.levels.empty() ? std::vector<std::uint32_t>{}
-                                                    : inherited_border(pending->points, out.levels.back().points,
-                                                                       s_->previous_border));
+          resolve_border(params, coarser ? inherited_border(pending->points, coarser->points, s_->previous_border)
+                                         : std::vector<std::uint32_t>{});
         s_->previous_border = params.border;
-        const std::uint64_t n = pending->points.size();
-        const std::string what = "the reconstruction of level " + std::to_string(pending->lod) + " (" +
-                                 std::to_string(n) + " points)";
-        std::optional<Tetrahedralization> coarse = std::move(s_->previous_dt);
-        s_->previous_dt.reset();
-        s_->memory -= s_->previous_dt_bytes;
-        s_->previous_dt_bytes = 0;
-        s_->reserve(n * kPointBytes, what);
-        const std::uint64_t room = options.limits.max_memory - s_->memory - n * kPointBytes;
-        // The previous level is the coarser one, and its points a subset.
-        Tetrahedralization dt = coarse && !out.levels.empty() && out.levels.back().lod == pending->lod + 1
-                                    ? delaunay_refine(pending->points, out.levels.back().points, std::move(*coarse), room / kTetBytes)
-                                    : delaunay(pending->points, room / kTetBytes);
-        coarse.reset();
-        auto rec = reconstruct(pending->points, dt, walk.header->kind, params);
-        pending->triangles = std::move(rec.triangles);
-        pending->tetrahedra = std::move(rec.tetrahedra);
-        s_->memory += (pending->triangles.size() + pending->tetrahedra.size()) * kSimplexBytes;
-        const std::uint64_t keep = dt.tets.size() * 2 * sizeof(dt.tets[0]);
-        const std::uint64_t max = options.limits.max_memory;
-        if (pending->lod > std::max(options.finest_level, 0) && s_->memory <= max && keep <= max - s_->memory) {
-          s_->previous_dt = std::move(dt);
-          s_->previous_dt_bytes = keep;
-          s_->memory += keep;
-        }
+        // The requested level is the last one decoded; any other may be put off.
+        if (options.rebuild_coarser_levels || pending->lod <= options.finest_level)
+          s_->rebuild(*pending, params, walk.header->kind, coarser);
+        else
+          s_->deferred = std::move(params);
       }
       pending->stream_bytes = c.offset + kChunkOverhead + c.length;
       out.levels.push_back(std::move(*pending));
@@ -288,6 +308,13 @@ void ChunkDecoder::finish(const ContainerView& view) {
   const DecodeOptions& options = s_->options;
   const ChunkWalker& walk = s_->walk;
   Decoded& out = s_->out;
+  // A level whose reconstruction was put off is the finest one decoded
+  // when no finer level followed it.
+  if (s_->deferred && !out.levels.empty()) {
+    const std::size_t k = out.levels.size();
+    s_->rebuild(out.levels.back(), *s_->deferred, walk.header->kind, k > 1 ? &out.levels[k - 2] : nullptr);
+    s_->deferred.reset();
+  }
   if (!walk.end_seen) {
     if (out.levels.empty())
       fail(Status::truncated, view.truncated ? view.truncation + "; no complete level"

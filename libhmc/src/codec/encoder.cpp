@@ -523,6 +523,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     dl.points = plan.points;
     dl.triangles = plan.rec.triangles;
     dl.tetrahedra = plan.rec.tetrahedra;
+    dl.rebuilt = rep.kind != Kind::points;
     dl.stream_bytes = level.stream_bytes;
     out.levels.push_back(std::move(dl));
   }
