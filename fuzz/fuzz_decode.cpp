@@ -15,7 +15,8 @@
 // decoded stream has its declared number of distinct grid points in
 // canonical order; inspect agrees with decode (it succeeds whenever decode
 // does, with the same header, quantizer and truncation, and decode fails
-// whenever inspect does).
+// whenever inspect does); with reconstruction, rebuilding only the finest
+// level gives it the same elements.
 #include <cstring>
 #include <vector>
 
@@ -162,6 +163,20 @@ void check_stream(const std::uint8_t* data, std::size_t size) {
       FUZZ_CHECK(f.levels[k].points == d.levels[k].points, "reconstruction changes the points of level %zu", k);
       const std::size_t elements = hmc_fuzz::check_connectivity(f.levels[k], f.levels[k].points.size());
       if (f.kind == hmc::Kind::points) FUZZ_CHECK(elements == 0, "elements rebuilt for kind points");
+    }
+    // The finest decoded level alone rebuilt: the same levels and points,
+    // the same elements for that level, none for the others.
+    options.rebuild_coarser_levels = false;
+    const auto fin = hmc::decode(data, size, options);
+    FUZZ_CHECK(fin.ok(), "rebuilding the finest level alone fails: %s", fin.error().to_string().c_str());
+    const hmc::Decoded& g = fin.value();
+    FUZZ_CHECK(g.levels.size() == f.levels.size(), "rebuilding the finest level alone changes the levels decoded");
+    for (std::size_t k = 0; k < g.levels.size(); ++k) {
+      const bool last = k + 1 == g.levels.size();
+      FUZZ_CHECK(g.levels[k].points == f.levels[k].points, "level %zu: other points when rebuilt alone", k);
+      FUZZ_CHECK(g.levels[k].triangles == (last ? f.levels[k].triangles : std::vector<hmc::Triangle>{}) &&
+                     g.levels[k].tetrahedra == (last ? f.levels[k].tetrahedra : std::vector<hmc::Tetrahedron>{}),
+                 "level %zu: other elements when only the finest level is rebuilt", k);
     }
   }
 }
