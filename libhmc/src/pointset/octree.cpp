@@ -8,6 +8,7 @@
 #include <string>
 
 #include "entropy/huffman.hpp"
+#include "pointset/lattice_neighbours.hpp"
 #include "pointset/plane_rank.hpp"
 #include "util/error.hpp"
 #include "util/kdtree.hpp"
@@ -170,17 +171,26 @@ constexpr int kMaxNeighbours = 15;  // 4-bit field
 constexpr int kBaseNeighbours = 10;  // what the reference encoder uses
 
 // The nodes of one depth in Morton order, with the centres of their cells
-// in doubled grid coordinates and a nearest-neighbour index over them.
+// in doubled grid coordinates, and their nearest neighbours: looked up in a
+// dense grid of cells around the node where the depth is dense enough
+// (LatticeNeighbours), else, or when they lie farther, searched in a k-d
+// tree over the centres (built on first use). Both give the same, exact
+// neighbours.
 class DepthNodes {
  public:
+  DepthNodes(const DepthNodes&) = delete;  // lattice_ refers to cells_
+  DepthNodes& operator=(const DepthNodes&) = delete;
   DepthNodes(const std::vector<std::uint64_t>& nodes, int d, int q) : d_(d), q_(q) {
     const std::int64_t h = std::int64_t{1} << (q - d);
+    cells_.resize(nodes.size());
     centres_.resize(nodes.size());
     for (std::size_t i = 0; i < nodes.size(); ++i) {
-      const GridPoint p = morton_point(nodes[i], d);
-      for (std::size_t a = 0; a < 3; ++a) centres_[i][a] = 2 * std::int64_t{p[a]} * h + h;
+      cells_[i] = morton_point(nodes[i], d);
+      for (std::size_t a = 0; a < 3; ++a) centres_[i][a] = 2 * std::int64_t{cells_[i][a]} * h + h;
     }
-    tree_ = KdTree<std::int64_t>(centres_);
+    lattice_.emplace(cells_, nodes, d);
+    // Sparse depths (a few nodes per 8^3 block) load a block per node.
+    if (lattice_->density() < kDenseBlock) lattice_.reset();
   }
 
   /// The ranking of the children of node i (spec 8.2): by the plane through
@@ -189,11 +199,17 @@ class DepthNodes {
   /// the smaller side of the plane, 0 | 1 | 2-3 | 4 -> 0 | 1 | 2 | 3.
   int rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order) const {
     const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
-    std::array<KdTree<std::int64_t>::Hit, kMaxNeighbours> hits{};
+    std::array<std::uint32_t, kMaxNeighbours> near{};
+    int found = lattice_ ? lattice_->nearest(i, k, near.data()) : -1;
+    if (found < 0) {
+      if (!tree_) tree_.emplace(centres_);
+      std::array<KdTree<std::int64_t>::Hit, kMaxNeighbours> hits{};
+      found = tree_->nearest(centres_[i], k, hits.data());
+      for (int j = 0; j < found; ++j) near[static_cast<std::size_t>(j)] = hits[static_cast<std::size_t>(j)].index;
+    }
     std::array<Doubled, kMaxNeighbours> nb{};
-    const int found = tree_.nearest(centres_[i], k, hits.data());
     for (int j = 0; j < found; ++j) {
-      const auto& c = centres_[hits[static_cast<std::size_t>(j)].index];
+      const auto& c = centres_[near[static_cast<std::size_t>(j)]];
       nb[static_cast<std::size_t>(j)] = {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[1]),
                                          static_cast<std::int32_t>(c[2])};
     }
@@ -213,9 +229,12 @@ class DepthNodes {
   }
 
  private:
+  static constexpr double kDenseBlock = 4.0;  // nodes per occupied block
   int d_, q_;
+  std::vector<GridPoint> cells_;
   std::vector<KdTree<std::int64_t>::Point> centres_;
-  KdTree<std::int64_t> tree_;
+  mutable std::optional<LatticeNeighbours> lattice_;
+  mutable std::optional<KdTree<std::int64_t>> tree_;
 };
 
 // Bits of a code-length table plus the symbols it codes.
