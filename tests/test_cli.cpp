@@ -55,6 +55,10 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   CHECK(r.out.find("\"type\": \"HEAD\"") != std::string::npos);
   CHECK(r.out.find("\"points\": 1800") != std::string::npos);
   CHECK(r.out.find("\"kind\": \"surface\"") != std::string::npos);
+  // The base layer's coder is named from its payload (octree or ranked octree).
+  const bool named = r.out.find("\"coder\": 0, \"coder_name\": \"octree\"") != std::string::npos ||
+                     r.out.find("\"coder\": 1, \"coder_name\": \"ranked octree\"") != std::string::npos;
+  CHECK(named);
 }
 
 TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each, with the same finest mesh") {

@@ -20,6 +20,15 @@ const char* refinement_coder_name(int coder) {
   }
 }
 
+// BASE coders (spec 8).
+const char* base_coder_name(int coder) {
+  switch (coder) {
+    case 0: return "octree";
+    case 1: return "ranked octree";
+    default: return "unknown";
+  }
+}
+
 }  // namespace
 
 int cmd_info(int argc, char** argv) {
@@ -36,6 +45,13 @@ int cmd_info(int argc, char** argv) {
   auto res = inspect(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), limits);
   if (!res) return report(in, res.error(), Stage::input);
   const StreamInfo& s = res.value();
+  // LevelReport::coder names REFN coders only; the base's is its payload's first byte.
+  int base_coder = -1;
+  for (const auto& c : s.chunks)
+    if (c.type == "BASE" && c.length > 0) base_coder = static_cast<unsigned char>(b[c.offset + 8]);
+  auto coder_name = [&](std::size_t i) {
+    return i == 0 ? base_coder_name(base_coder) : refinement_coder_name(s.levels[i].coder);
+  };
   if (a.flag("--json")) {
     Json j;
     j.begin_object();
@@ -55,11 +71,12 @@ int cmd_info(int argc, char** argv) {
     }
     j.end_array();
     j.key("levels").begin_array();
-    for (const auto& l : s.levels) {
+    for (std::size_t i = 0; i < s.levels.size(); ++i) {
+      const auto& l = s.levels[i];
       j.begin_object();
       j.key("level").value(l.lod).key("points").value(l.points).key("new_points").value(l.new_points);
       j.key("layer_bytes").value(l.layer_bytes).key("stream_bytes").value(l.stream_bytes);
-      j.key("coder").value(l.coder);
+      j.key("coder").value(i == 0 ? base_coder : l.coder).key("coder_name").value(coder_name(i));
       j.end_object();
     }
     j.end_array().end_object();
@@ -82,7 +99,7 @@ int cmd_info(int argc, char** argv) {
                 static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
                 static_cast<unsigned long long>(l.stream_bytes),
                 8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points),
-                i == 0 ? "octree" : refinement_coder_name(l.coder));
+                coder_name(i));
   }
   if (s.truncated) std::printf("\nwarning: %s\n", s.warning.c_str());
   return kOk;
