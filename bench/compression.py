@@ -597,6 +597,15 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
             f"{r['r_enc']:.1f} | {r['r_enc_wall']:.1f} | {r['t_decp']['cpu'] / base:.2f} | "
             f"{r['t_decp1']['cpu'] / base:.2f} | {r['r_mem']:.2f} | {r['r_mem1']:.2f} | {r['r_mem_enc']:.2f} |")
     say("")
+    gm = lambda key: statistics.geometric_mean([r[key] for r in results])
+    gp1 = statistics.geometric_mean([r["t_decp1"]["cpu"] / r["t_del"]["cpu"] for r in results])
+    say(f"Where the decoding bar stands (geometric means): decoding the 1-level stream with its reconstruction costs "
+        f"{gm('r_dec1'):.2f} Delaunays (its points alone {gp1:.2f}; then one Delaunay, the reconstruction rule, "
+        f"toggles and output), rebuilding the finest level of the {LEVELS}-level stream alone {gm('r_decf'):.2f}, "
+        f"rebuilding every level {gm('r_dec'):.2f}. So the 1.5 bar would need the points and one level's "
+        "reconstruction well under half a Delaunay and the coarser levels' reconstructions nearly free; those run "
+        "the repair of spec 11.4a, a local search that takes most of their time.")
+    say("")
 
     # 4. Raw times.
     say("## 4. Times and peak memory")
