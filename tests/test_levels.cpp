@@ -169,10 +169,12 @@ TEST_CASE("rebuilding only the finest decoded level gives it the same mesh and s
   cases.push_back({"torus", encode_levels(samples::torus(40, 16), 4)});
   cases.push_back({"open surface", encode_levels(samples::height_field(20, 0.15), 4)});
   cases.push_back({"volume", std::move(v).value()});
-  for (const auto& [name, e] : cases) {
+  for (const auto& one : cases) {
+    const std::string name = one.name;  // not a structured binding: CAPTURE's lambda cannot capture those (clang)
+    const Encoded& e = one.e;
     CAPTURE(name);
     REQUIRE(e.levels.size() >= 3);
-    if (std::string(name) == "open surface") {
+    if (name == "open surface") {
       // At least one finer level inherits its border (RCON flag bit 3).
       const auto view = parse_container(e.bytes.data(), e.bytes.size(), kEnd);
       int inherits = 0;
