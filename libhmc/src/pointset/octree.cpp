@@ -175,7 +175,7 @@ constexpr int kBaseNeighbours = 10;  // what the reference encoder uses
 // dense grid of cells around the node where the depth is dense enough
 // (LatticeNeighbours), else, or when they lie farther, searched in a k-d
 // tree over the centres (built on first use). Both give the same, exact
-// neighbours.
+// neighbours. `nodes` must outlive the object.
 class DepthNodes {
  public:
   DepthNodes(const DepthNodes&) = delete;  // lattice_ refers to cells_
