@@ -219,6 +219,29 @@ TEST_CASE("rebuilding only the finest decoded level gives it the same mesh and s
   }
 }
 
+TEST_CASE("decoding reports progress: each level's points, then each level it rebuilds") {
+  const auto e = encode_levels(samples::torus(40, 16), 3);
+  REQUIRE(e.levels.size() == 3);
+  std::vector<std::pair<int, bool>> calls;
+  DecodeOptions o;
+  o.progress = [&](int level, bool rebuilding) { calls.emplace_back(level, rebuilding); };
+  REQUIRE(decode(e.bytes.data(), e.bytes.size(), o).ok());
+  CHECK(calls == std::vector<std::pair<int, bool>>{{2, false}, {2, true}, {1, false}, {1, true}, {0, false}, {0, true}});
+  calls.clear();
+  o.rebuild_coarser_levels = false;
+  REQUIRE(decode(e.bytes.data(), e.bytes.size(), o).ok());
+  CHECK(calls == std::vector<std::pair<int, bool>>{{2, false}, {1, false}, {0, false}, {0, true}});
+  calls.clear();
+  o.reconstruct = false;
+  REQUIRE(decode(e.bytes.data(), e.bytes.size(), o).ok());
+  CHECK(calls == std::vector<std::pair<int, bool>>{{2, false}, {1, false}, {0, false}});
+  // A cut stream in finest-only mode: its last level is rebuilt at the end.
+  calls.clear();
+  o.reconstruct = true;
+  REQUIRE(decode(e.bytes.data(), e.levels[1].stream_bytes, o).ok());
+  CHECK(calls == std::vector<std::pair<int, bool>>{{2, false}, {1, false}, {1, true}});
+}
+
 TEST_CASE("stream structure errors around refinement layers") {
   const auto e = encode_levels(samples::uv_sphere(12, 24), 3);
   auto v = parse_container(e.bytes.data(), e.bytes.size(), kEnd);

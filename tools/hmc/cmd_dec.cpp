@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <string>
 
+#include <unistd.h>
+
 #include "cli.hpp"
 #include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
@@ -74,11 +76,19 @@ int cmd_dec(int argc, char** argv) {
     return kUsage;
   }
   const std::string in = a.positional()[0];
+  // Progress on a terminal only: scripts reading stderr get no noise.
+  const bool tty = isatty(fileno(stderr)) != 0;
+  if (tty)
+    opt.progress = [](int level, bool rebuilding) {
+      std::fprintf(stderr, "\rhmc: decoding, level %d, %-12s", level, rebuilding ? "rebuilding" : "points");
+      std::fflush(stderr);
+    };
   const auto t0 = std::chrono::steady_clock::now();
   auto bytes = io::read_file(in, opt.limits.max_bytes);
   if (!bytes) return report("cannot read " + in, bytes.error(), Stage::input);
   const auto& b = bytes.value();
   auto dec = decode(reinterpret_cast<const std::uint8_t*>(b.data()), b.size(), opt);
+  if (tty) std::fprintf(stderr, "\r%45s\r", "");
   if (!dec) return report(in, dec.error(), Stage::input);
   const auto t1 = std::chrono::steady_clock::now();
   const Decoded& d = dec.value();

@@ -242,6 +242,11 @@ struct DecodeOptions {
   /// stops before the requested level, the last complete level is rebuilt
   /// when the data ends (StreamDecoder: at finish()).
   bool rebuild_coarser_levels = true;
+  /// Called as the decoder starts on a level (lod, 0 = finest): on its
+  /// points (rebuilding false), then, if it rebuilds it, on its
+  /// connectivity (true), the long part of a large level. It must not
+  /// throw.
+  std::function<void(int level, bool rebuilding)> progress = nullptr;
 };
 
 

@@ -181,6 +181,7 @@ struct ChunkDecoder::State {
 
 void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params, Kind kind,
                                   const DecodedLevel* coarser) {
+  if (options.progress) options.progress(level.lod, true);
   const std::uint64_t n = level.points.size();
   const std::string what =
       "the reconstruction of level " + std::to_string(level.lod) + " (" + std::to_string(n) + " points)";
@@ -240,6 +241,7 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
       if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
       DecodedLevel level;
       level.lod = static_cast<int>(counts.size() - 1 - k);
+      if (options.progress) options.progress(level.lod, false);
       s_->reserve(counts[k] * kPointBytes, "level " + std::to_string(level.lod) + " (" + std::to_string(counts[k]) + " points)");
       if (k == 0) {
         level.points = decode_base(c.payload, c.length, walk.quantizer->bits, counts.front(), walk.header->tables);
