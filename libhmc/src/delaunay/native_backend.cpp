@@ -100,6 +100,13 @@ class Builder {
     int face;
   };
   std::vector<EdgeSlot> edges_;
+  struct PairSlot {
+    std::uint64_t key = 0;
+    std::uint32_t stamp = 0, index = 0;
+  };
+  static constexpr std::uint32_t kPaired = ~std::uint32_t{0};
+  std::vector<PairSlot> pair_table_;  // link_pairs()
+  std::uint32_t pair_stamp_ = 0;
 
   bool is_hull(std::uint32_t c) const { return cells_[c].v[3] == inf_; }
 
@@ -233,6 +240,43 @@ class Builder {
     last_ = 0;
   }
 
+  // Links the new cells around p: each edge of the cavity's boundary is in
+  // exactly two of edges_, whose faces become neighbours. Pairs are found
+  // in a small open-addressing table (a cavity has a few dozen slots; a
+  // sort of them was 6 % of a decode).
+  void link_pairs() {
+    if (edges_.size() % 2 != 0) fail(Status::internal_error, "delaunay: cavity not a ball");
+    std::size_t size = 64;
+    while (size < 2 * edges_.size()) size *= 2;
+    if (pair_table_.size() < size) pair_table_.assign(size, PairSlot{});
+    const std::uint64_t mask = size - 1;
+    if (++pair_stamp_ == 0) {  // the stamps wrapped: clear the table
+      std::fill(pair_table_.begin(), pair_table_.end(), PairSlot{});
+      pair_stamp_ = 1;
+    }
+    std::size_t matched = 0;
+    for (std::uint32_t i = 0; i < edges_.size(); ++i) {
+      const std::uint64_t key = edges_[i].key;
+      std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> 32;
+      for (;; ++h) {
+        PairSlot& slot = pair_table_[h & mask];
+        if (slot.stamp != pair_stamp_) {  // empty: the first of the pair
+          slot = {key, pair_stamp_, i};
+          break;
+        }
+        if (slot.key != key) continue;
+        if (slot.index == kPaired) fail(Status::internal_error, "delaunay: cavity not a ball");
+        const EdgeSlot& a = edges_[slot.index];
+        cells_[a.cell].n[a.face] = edges_[i].cell;
+        cells_[edges_[i].cell].n[edges_[i].face] = a.cell;
+        slot.index = kPaired;
+        ++matched;
+        break;
+      }
+    }
+    if (2 * matched != edges_.size()) fail(Status::internal_error, "delaunay: cavity not a ball");
+  }
+
   // Links hull cells a and b if they share an edge (two finite vertices).
   void link_hull_pair(std::uint32_t a, std::uint32_t b) {
     for (int i = 0; i < 3; ++i) {
@@ -341,13 +385,7 @@ class Builder {
       }
       last_ = nc;
     }
-    std::sort(edges_.begin(), edges_.end(), [](const EdgeSlot& a, const EdgeSlot& b) { return a.key < b.key; });
-    if (edges_.size() % 2 != 0) fail(Status::internal_error, "delaunay: cavity not a ball");
-    for (std::size_t i = 0; i + 1 < edges_.size(); i += 2) {
-      if (edges_[i].key != edges_[i + 1].key) fail(Status::internal_error, "delaunay: cavity not a ball");
-      cells_[edges_[i].cell].n[edges_[i].face] = edges_[i + 1].cell;
-      cells_[edges_[i + 1].cell].n[edges_[i + 1].face] = edges_[i].cell;
-    }
+    link_pairs();
     for (std::uint32_t c : cavity_) {
       cells_[c].v = {kNone, kNone, kNone, kNone};
       free_.push_back(c);
