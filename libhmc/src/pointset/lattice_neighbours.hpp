@@ -76,7 +76,7 @@ class LatticeNeighbours {
   static constexpr int kMaxCandidates = 64;
   static constexpr std::uint32_t kMaxScan = 1024;  // distances computed per search, at most
   struct Offset {
-    std::int32_t dx, dy, dz, r2;
+    std::int32_t dx, dy, dz, r2, ring;
   };
   struct Block {
     std::uint64_t key;
@@ -126,81 +126,72 @@ class LatticeNeighbours {
     const std::int64_t side = std::int64_t{1} << shift_;
     std::int64_t within[3];
     for (int a = 0; a < 3; ++a) within[a] = c[static_cast<std::size_t>(a)] & (side - 1);
-    const auto& rings = ring_offsets();
-    std::uint32_t scanned = 0;
-    for (std::int32_t r = 0; r <= kMargin; ++r) {
-      for (std::size_t x = ring_start()[static_cast<std::size_t>(r)]; x < ring_start()[static_cast<std::size_t>(r) + 1]; ++x) {
-        const Range& range = at(base, rings[x]);
-        // Crowded buckets (a cluster among sparse nodes) are left to the
-        // k-d tree: the work per node stays bounded whatever the input.
-        scanned += range.end - range.begin;
-        if (scanned > kMaxScan) return -1;
-        for (std::uint32_t j = range.begin; j < range.end; ++j) {
-          std::uint64_t d2 = 0;
-          for (std::size_t a = 0; a < 3; ++a) {
-            const std::int64_t t = std::int64_t{cells_[j][a]} - std::int64_t{c[a]};
-            d2 += static_cast<std::uint64_t>(t * t);
-          }
-          const Hit h{d2, j};
-          if (n == k && !(h < best[static_cast<std::size_t>(k - 1)])) continue;
-          int p = n < k ? n++ : k - 1;
-          for (; p > 0 && h < best[static_cast<std::size_t>(p - 1)]; --p) best[static_cast<std::size_t>(p)] = best[static_cast<std::size_t>(p - 1)];
-          best[static_cast<std::size_t>(p)] = h;
-        }
-      }
-      if (n < k) continue;
+    // After ring r is read: the k-th best is final when it is nearer than
+    // any node of ring r + 1 or beyond can be.
+    auto settled = [&](std::int32_t r) {
+      if (n < k) return false;
       std::int64_t gap = std::numeric_limits<std::int64_t>::max();
-      for (int a = 0; a < 3; ++a)
-        gap = std::min({gap, side * (r + 1) - within[a], within[a] + side * r + 1});
-      if (best[static_cast<std::size_t>(k - 1)].d2 < static_cast<std::uint64_t>(gap * gap)) {
-        for (int j = 0; j < k; ++j) out[j] = best[static_cast<std::size_t>(j)].index;
-        return k;
+      for (int a = 0; a < 3; ++a) gap = std::min({gap, side * (r + 1) - within[a], within[a] + side * r + 1});
+      return best[static_cast<std::size_t>(k - 1)].d2 < static_cast<std::uint64_t>(gap * gap);
+    };
+    std::uint32_t scanned = 0;
+    std::int32_t ring = 0;
+    for (const Offset& o : rings()) {
+      if (o.ring != ring) {
+        if (settled(ring)) break;
+        ring = o.ring;
+      }
+      const Range& range = at(base, o);
+      // Crowded buckets (a cluster among sparse nodes) are left to the
+      // k-d tree: the work per node stays bounded whatever the input.
+      scanned += range.end - range.begin;
+      if (scanned > kMaxScan) return -1;
+      for (std::uint32_t j = range.begin; j < range.end; ++j) {
+        std::uint64_t d2 = 0;
+        for (std::size_t a = 0; a < 3; ++a) {
+          const std::int64_t t = std::int64_t{cells_[j][a]} - std::int64_t{c[a]};
+          d2 += static_cast<std::uint64_t>(t * t);
+        }
+        const Hit h{d2, j};
+        if (n == k && !(h < best[static_cast<std::size_t>(k - 1)])) continue;
+        int p = n < k ? n++ : k - 1;
+        for (; p > 0 && h < best[static_cast<std::size_t>(p - 1)]; --p) best[static_cast<std::size_t>(p)] = best[static_cast<std::size_t>(p - 1)];
+        best[static_cast<std::size_t>(p)] = h;
       }
     }
-    return -1;
+    if (!settled(ring)) return -1;
+    for (int j = 0; j < k; ++j) out[j] = best[static_cast<std::size_t>(j)].index;
+    return k;
   }
 
-  // Every offset within kMargin buckets (Euclidean), by squared length.
+  // Every offset within kMargin buckets in each coordinate, with its squared
+  // length and ring (largest coordinate difference).
+  static std::vector<Offset> cube() {
+    std::vector<Offset> v;
+    for (std::int32_t x = -kMargin; x <= kMargin; ++x)
+      for (std::int32_t y = -kMargin; y <= kMargin; ++y)
+        for (std::int32_t z = -kMargin; z <= kMargin; ++z)
+          v.push_back({x, y, z, x * x + y * y + z * z, std::max({std::abs(x), std::abs(y), std::abs(z)})});
+    return v;
+  }
+  // Those within kMargin (Euclidean), by squared length.
   static const std::vector<Offset>& sphere() {
     static const std::vector<Offset> list = [] {
-      std::vector<Offset> v;
-      for (std::int32_t x = -kMargin; x <= kMargin; ++x)
-        for (std::int32_t y = -kMargin; y <= kMargin; ++y)
-          for (std::int32_t z = -kMargin; z <= kMargin; ++z)
-            if (x * x + y * y + z * z <= kMargin * kMargin) v.push_back({x, y, z, x * x + y * y + z * z});
+      std::vector<Offset> v = cube();
+      v.erase(std::remove_if(v.begin(), v.end(), [](const Offset& o) { return o.r2 > kMargin * kMargin; }), v.end());
       std::stable_sort(v.begin(), v.end(), [](const Offset& a, const Offset& b) { return a.r2 < b.r2; });
       return v;
     }();
     return list;
   }
-
-  // Every offset within kMargin buckets in each coordinate, ring by ring
-  // (ring r: largest coordinate difference r); ring_start()[r] is where
-  // ring r begins.
-  static std::int32_t ring_of(const Offset& o) {
-    return std::max({std::abs(o.dx), std::abs(o.dy), std::abs(o.dz)});
-  }
-  static const std::vector<Offset>& ring_offsets() {
+  // All of them, ring by ring.
+  static const std::vector<Offset>& rings() {
     static const std::vector<Offset> list = [] {
-      std::vector<Offset> v;
-      for (std::int32_t x = -kMargin; x <= kMargin; ++x)
-        for (std::int32_t y = -kMargin; y <= kMargin; ++y)
-          for (std::int32_t z = -kMargin; z <= kMargin; ++z) v.push_back({x, y, z, x * x + y * y + z * z});
-      std::stable_sort(v.begin(), v.end(), [](const Offset& a, const Offset& b) { return ring_of(a) < ring_of(b); });
+      std::vector<Offset> v = cube();
+      std::stable_sort(v.begin(), v.end(), [](const Offset& a, const Offset& b) { return a.ring < b.ring; });
       return v;
     }();
     return list;
-  }
-  static const std::array<std::size_t, kMargin + 2>& ring_start() {
-    static const std::array<std::size_t, kMargin + 2> start = [] {
-      std::array<std::size_t, kMargin + 2> s{};
-      const auto& v = ring_offsets();
-      for (std::int32_t r = 0; r <= kMargin + 1; ++r)
-        s[static_cast<std::size_t>(r)] = static_cast<std::size_t>(
-            std::find_if(v.begin(), v.end(), [&](const Offset& o) { return ring_of(o) >= r; }) - v.begin());
-      return s;
-    }();
-    return start;
   }
 
   // Fill the grid with the buckets of the block `key` and of the blocks
