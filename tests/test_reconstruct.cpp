@@ -717,14 +717,16 @@ TEST_CASE("winding numbers: exact near the triangles, 1 inside and 0 outside a c
   }
   CHECK(inside > 40);  // the sample reaches inside (about 5 %)
 
-  // A sphere of 2,208 triangles: clusters far from the query are dipoles,
-  // good to a few hundredths, which the encoder's inside test (thresholds
-  // 1/4, 1/2, 3/4) allows.
+  // A sphere of 2,208 triangles: clusters far from the query are replaced
+  // by their expansion to second order, good to 0.015 here (the encoder's
+  // inside test, thresholds 1/4, 1/2, 3/4, allows a few hundredths). Either
+  // order left out gives 0.06 to 0.17 at the centre.
   const Mesh s = samples::uv_sphere(24, 48);
   const WindingNumber ws(s.points, s.triangles);
   const double sign = ws({0, 0, 0}) > 0 ? 1 : -1;
-  for (double r : {0.0, 0.5, 0.9, 0.97}) CHECK(std::abs(sign * ws({r * 0.6, r * 0.48, r * 0.64}) - 1) < 0.05);
-  for (double r : {1.03, 1.2, 3.0, 50.0}) CHECK(std::abs(ws({r * 0.6, r * 0.48, r * 0.64})) < 0.05);
+  for (double r : {0.0, 0.5, 0.9, 0.97, 0.99})
+    CHECK(std::abs(sign * ws({r * 0.6, r * 0.48, r * 0.64}) - 1) < 0.025);
+  for (double r : {1.01, 1.03, 1.2, 3.0, 50.0}) CHECK(std::abs(ws({r * 0.6, r * 0.48, r * 0.64})) < 0.025);
 }
 
 TEST_CASE("truth labels: winding numbers carried to a coarser level give the same labels") {

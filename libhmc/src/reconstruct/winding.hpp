@@ -2,8 +2,9 @@
 // Generalized winding numbers of query points with respect to a triangle
 // soup (encoder side, non-normative): the encoder uses them to tell which
 // Delaunay tetrahedra lie inside the input surface or volume. Far clusters
-// of triangles are approximated by their area-weighted dipole, near ones
-// summed exactly, so a query costs O(log F) for F triangles.
+// of triangles are replaced by a second-order expansion of their solid
+// angle around their area-weighted centroid, near ones summed exactly, so
+// a query costs O(log F) for F triangles.
 #pragma once
 
 #include <array>
@@ -26,6 +27,14 @@ class WindingNumber {
   struct Node {
     Vec3 centre{};           // area-weighted centroid
     Vec3 area{};             // sum of area vectors (half cross products)
+    // Moments of the triangles' area about the centre, folded into the
+    // coefficients the far-field expansion contracts with (see build()):
+    // first order, trace and the quadratic form's six coefficients; second
+    // order, two vectors and the cubic form's ten coefficients.
+    double trace1 = 0;
+    std::array<double, 6> quad1{};
+    Vec3 u2{}, v2{};
+    std::array<double, 10> cubic2{};
     double radius = 0;       // bounds every triangle vertex around centre
     std::uint32_t begin = 0, end = 0;  // range in tri_ (leaf) ...
     std::uint32_t left = 0, right = 0; // ... or children (left != 0)
