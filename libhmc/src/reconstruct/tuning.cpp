@@ -483,6 +483,10 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       return static_cast<std::uint64_t>(bits) + 8 * p.multipliers.size();
     };
     auto consider = [&](const ReconParams& p, std::uint64_t class_bits) {
+      // No mismatch is the least a trial can reach: when even that does not
+      // beat the best, skip the work (the same choice, sooner; volumes'
+      // coarser levels often reach it with the first trial).
+      if (class_bits + list_bits(0, nt) >= best_bits) return false;
       const std::uint64_t mism = cost(p, scale, trial);
       const std::uint64_t bits = class_bits + list_bits(mism, nt);
       if (bits >= best_bits) return false;
@@ -556,6 +560,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
                                                    {kLone, 1},           {kNeighbourRadius, 4096}, {kNeighbourRatio, 32}};
     for (const auto& [id, threshold] : tries) {
       if (in.approximate) break;  // coarser levels: the repair does better, at no cost
+      if (current == 0) break;    // nothing left for a filter to mend
       ReconParams p = best;
       p.filters[static_cast<std::size_t>(id)] = threshold;
       const std::uint64_t c = cost(p, scale, trial);
