@@ -56,6 +56,12 @@ for spec in ball64:ball:64:volume sphere90:sphere:90:surface sphere50:sphere:50:
   done
 done
 
+# Mesh files as the library writes them: seeds for the readers (meshio).
+"$HMC" gen torus --vertices 30 --seed 7 -o "$WORK/mesh-torus.ply" >/dev/null
+for ext in obj xyz vtk mesh; do
+  "$HMC" gen torus --vertices 30 --seed 7 -o "$WORK/mesh-torus.$ext" >/dev/null
+done
+
 rm -rf "$CORPUS"
 mkdir -p "$CORPUS"
 python3 - "$WORK" "$CORPUS" <<'EOF'
@@ -322,6 +328,35 @@ put("roundtrip", "one-point", rt(5, 0x04, 0, [(7, 7, 7)], "i"))
 put("roundtrip", "duplicates", rt(3, 0x00, 9, [(1, 2, 3)] * 20 + [(4, 5, 6)] * 3, "i"))
 put("roundtrip", "no-points", bytes([11, 0, 0]))
 put("roundtrip", "extremes", rt(21, 0x03, 4, [(-2**31, -2**31, -2**31), (2**31 - 1, 2**31 - 1, 2**31 - 1), (0, 0, 0)], "i"))
+
+# --- meshio: the reader (0 PLY, 1 OBJ, 2 OFF, 3 XYZ, 4 STL, 5 MEDIT, 6 Gmsh,
+# 7 VTK), then the file ------------------------------------------------------
+for ext, reader in (("ply", 0), ("obj", 1), ("xyz", 3), ("mesh", 5), ("vtk", 7)):
+    with open(os.path.join(work, "mesh-torus." + ext), "rb") as f:
+        put("meshio", "torus-" + ext, bytes([reader]) + f.read())
+tet4 = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+put("meshio", "ply-ascii", b"\x00" + ("ply\nformat ascii 1.0\ncomment hand-made\nelement vertex 4\nproperty float x\n"
+    "property float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n" +
+    tet4 + "3 0 1 2\n4 0 1 3 2\n").encode())
+put("meshio", "ply-big-endian", b"\x00" + b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\n"
+    b"property double y\nproperty double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n" +
+    struct.pack(">9d", 0, 0, 0, 1, 0, 0, 0, 1, 0) + bytes([3]) + struct.pack(">3I", 0, 1, 2))
+put("meshio", "obj-polygons", b"\x01# comment\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvn 0 0 1\n"
+    b"f 1/1/1 2/1/1 3/1/1\nf -4 -3 -1 -2\n")
+put("meshio", "off", b"\x02OFF\n4 3 0\n" + tet4.encode() + b"3 0 1 2\n3 0 1 3\n4 0 2 3 1\n")
+put("meshio", "stl-ascii", b"\x04solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+    b"vertex 0 1 0\nendloop\nendfacet\nendsolid x\n")
+put("meshio", "stl-binary", b"\x04" + b"binary".ljust(80, b" ") + struct.pack("<I", 2) +
+    struct.pack("<12f", 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0) + b"\0\0" +
+    struct.pack("<12f", 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 0) + b"\0\0")
+put("meshio", "medit-tet", b"\x05MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n"
+    b"0 0 1 0\nTetrahedra\n1\n1 2 3 4 0\nTriangles\n1\n1 2 3 0\nEnd\n")
+put("meshio", "gmsh-2.2", b"\x06$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n"
+    b"4 0 0 1\n$EndNodes\n$Elements\n2\n1 4 2 0 0 1 2 3 4\n2 2 2 0 0 1 2 3\n$EndElements\n")
+put("meshio", "gmsh-4.1", b"\x06$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n"
+    b"0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n")
+put("meshio", "vtk-ascii-tet", b"\x07# vtk DataFile Version 3.0\nhand-made\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+    b"POINTS 4 double\n" + tet4.encode() + b"CELLS 2 9\n4 0 1 2 3\n3 0 1 2\nCELL_TYPES 2\n10\n5\n")
 EOF
 
 du -sh "$CORPUS"
