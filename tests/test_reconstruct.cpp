@@ -21,6 +21,7 @@
 #include "reconstruct/winding.hpp"
 #include "samples.hpp"
 #include "util/bytes.hpp"
+#include "util/u256.hpp"
 
 using namespace hmc;
 using namespace hmc::detail;
@@ -397,6 +398,199 @@ TEST_CASE("a stream cut between the layer and its RCON has no complete level") {
   REQUIRE(recon_at > 0);
   auto d = decode(e.bytes.data(), recon_at);
   CHECK(d.status() == Status::truncated);
+}
+
+// The candidate faces and the rule without peeling, written from spec
+// 11.1-11.2a as plainly as possible (faces found through a map, neighbours
+// by scanning every face on each edge, every comparison in exact integers):
+// what candidate_flags() and rule_labels() must give however they are
+// optimized.
+struct PlainRule {
+  std::vector<std::uint8_t> candidates;  // per slot 4·t + k
+  std::vector<std::uint8_t> inside;
+};
+PlainRule plain_rule(const std::vector<GridPoint>& pts, const Tetrahedralization& dt,
+                     const std::vector<std::uint64_t>& scale, const ReconParams& p) {
+  __extension__ typedef unsigned __int128 U128;
+  const std::size_t nt = dt.tets.size();
+  std::vector<std::uint64_t> lim(pts.size());
+  for (std::size_t v = 0; v < pts.size(); ++v)
+    lim[v] = scale[v] * p.multipliers[p.vertex_class.empty() ? 0 : p.vertex_class[v]];
+  using Tri = std::array<std::uint32_t, 3>;
+  std::map<Tri, std::size_t> id;
+  std::vector<Tri> faces;
+  std::vector<std::array<std::size_t, 4>> face_of(nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      Tri f{dt.tets[t][kFaceVertices[k][0]], dt.tets[t][kFaceVertices[k][1]], dt.tets[t][kFaceVertices[k][2]]};
+      std::sort(f.begin(), f.end());
+      auto it = id.emplace(f, faces.size()).first;
+      if (it->second == faces.size()) faces.push_back(f);
+      face_of[t][static_cast<std::size_t>(k)] = it->second;
+    }
+  const std::size_t nf = faces.size();
+  struct Parts {
+    std::uint64_t e[3];  // squared edge lengths
+    U128 d;              // |(b - a) x (c - a)|^2
+    U256 n() const { return U256::from(e[0]).mul(e[1]).mul(e[2]); }
+    std::uint64_t emin() const { return std::min({e[0], e[1], e[2]}); }
+    std::uint64_t emax() const { return std::max({e[0], e[1], e[2]}); }
+  };
+  auto parts = [&](const Tri& f) {
+    Parts r;
+    r.e[0] = dist2(pts[f[1]], pts[f[2]]);
+    r.e[1] = dist2(pts[f[2]], pts[f[0]]);
+    r.e[2] = dist2(pts[f[0]], pts[f[1]]);
+    std::int64_t u[3], w[3];
+    for (int a = 0; a < 3; ++a) u[a] = std::int64_t{pts[f[1]][a]} - pts[f[0]][a], w[a] = std::int64_t{pts[f[2]][a]} - pts[f[0]][a];
+    r.d = 0;
+    for (int a = 0; a < 3; ++a) {
+      const std::int64_t c = u[(a + 1) % 3] * w[(a + 2) % 3] - u[(a + 2) % 3] * w[(a + 1) % 3];
+      r.d += static_cast<U128>(c < 0 ? -c : c) * static_cast<U128>(c < 0 ? -c : c);
+    }
+    return r;
+  };
+  auto wide = [](U128 x) { return U256::from(1).mul(static_cast<std::uint64_t>(x >> 64), static_cast<std::uint64_t>(x)); };
+  std::vector<std::uint8_t> cand(nf, 1);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int a = 0; a < 3; ++a) {
+      const std::uint32_t x = faces[f][a], y = faces[f][(a + 1) % 3];
+      if (256 * dist2(pts[x], pts[y]) > std::min(lim[x], lim[y])) cand[f] = 0;
+    }
+  const auto& th = p.filters;
+  std::vector<std::uint8_t> keep = cand;
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (!cand[f]) continue;
+    const Parts t = parts(faces[f]);
+    const std::uint64_t s = std::min({scale[faces[f][0]], scale[faces[f][1]], scale[faces[f][2]]});
+    if (th[kCircleRadius] && compare(t.n().mul(256), wide(t.d).mul(4ull * s).mul(th[kCircleRadius])) > 0) keep[f] = 0;
+    if (th[kEdgeRatio] && static_cast<U128>(t.emin()) * 256 < static_cast<U128>(t.emax()) * th[kEdgeRatio]) keep[f] = 0;
+    if (th[kDensity] && compare(wide(t.d).mul(256), U256::from(s).mul(s).mul(th[kDensity])) > 0) keep[f] = 0;
+  }
+  if (th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio]) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::size_t>> on_edge;
+    for (std::size_t f = 0; f < nf; ++f)
+      if (keep[f])
+        for (int a = 0; a < 3; ++a)
+          for (int b = a + 1; b < 3; ++b) on_edge[{faces[f][a], faces[f][b]}].push_back(f);
+    auto r2_less = [&](const Parts& a, const Parts& b) {  // R²(a) < R²(b); D = 0 is infinite
+      if (a.d == 0 || b.d == 0) return a.d != 0 && b.d == 0;
+      return compare(a.n().mul(static_cast<std::uint64_t>(b.d >> 64), static_cast<std::uint64_t>(b.d)),
+                     b.n().mul(static_cast<std::uint64_t>(a.d >> 64), static_cast<std::uint64_t>(a.d))) < 0;
+    };
+    std::vector<std::uint8_t> next = keep;
+    for (std::size_t f = 0; f < nf; ++f) {
+      if (!keep[f]) continue;
+      std::vector<std::size_t> nb;
+      for (int a = 0; a < 3; ++a)
+        for (int b = a + 1; b < 3; ++b)
+          for (std::size_t g : on_edge[{faces[f][a], faces[f][b]}])
+            if (g != f) nb.push_back(g);
+      if (nb.empty()) {
+        if (th[kLone]) next[f] = 0;
+        continue;
+      }
+      const Parts tf = parts(faces[f]);
+      Parts big = parts(faces[nb[0]]), flat = big;
+      for (std::size_t g : nb) {
+        const Parts tg = parts(faces[g]);
+        if (r2_less(big, tg)) big = tg;
+        if (static_cast<U128>(flat.emin()) * tg.emax() < static_cast<U128>(tg.emin()) * flat.emax()) flat = tg;
+      }
+      if (th[kNeighbourRadius] && big.d != 0 &&
+          (tf.d == 0 ||
+           compare(tf.n().mul(static_cast<std::uint64_t>(big.d >> 64), static_cast<std::uint64_t>(big.d)).mul(256),
+                   big.n().mul(static_cast<std::uint64_t>(tf.d >> 64), static_cast<std::uint64_t>(tf.d)).mul(th[kNeighbourRadius])) > 0))
+        next[f] = 0;
+      if (th[kNeighbourRatio] &&
+          compare(wide(static_cast<U128>(tf.emin()) * flat.emax()).mul(256),
+                  wide(static_cast<U128>(flat.emin()) * tf.emax()).mul(th[kNeighbourRatio])) < 0)
+        next[f] = 0;
+    }
+    keep = next;
+  }
+  PlainRule out;
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) out.candidates.push_back(keep[face_of[t][static_cast<std::size_t>(k)]]);
+  // Flood from outside the hull through faces that are not candidates.
+  std::vector<std::uint8_t> inside(nt, 1);
+  std::vector<std::uint32_t> stack;
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k)
+      if (dt.neighbors[t][k] == kNoTet && !keep[face_of[t][k]] && inside[t]) inside[t] = 0, stack.push_back(static_cast<std::uint32_t>(t));
+  while (!stack.empty()) {
+    const std::uint32_t t = stack.back();
+    stack.pop_back();
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && inside[u] && !keep[face_of[t][k]]) inside[u] = 0, stack.push_back(u);
+    }
+  }
+  out.inside = std::move(inside);
+  return out;
+}
+
+TEST_CASE("the candidate filters give the plainly written rule's labels") {
+  // A scanned-like surface, a lattice (congruent faces: ties everywhere) and
+  // random points (faces of every shape).
+  std::vector<std::vector<GridPoint>> sets;
+  {
+    const auto e = encode(samples::uv_sphere(14, 28)).value();
+    sets.push_back(e.points);
+  }
+  {
+    std::vector<GridPoint> lattice;
+    for (std::uint32_t x = 0; x < 6; ++x)
+      for (std::uint32_t y = 0; y < 6; ++y)
+        for (std::uint32_t z = 0; z < 5; ++z) lattice.push_back({10 * x + (y % 2), 10 * y, 10 * z + (x % 3)});
+    sets.push_back(lattice);
+  }
+  {
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<std::uint32_t> c(0, 4000);
+    std::set<GridPoint> s;
+    while (s.size() < 300) s.insert({c(rng), c(rng), c(rng) / 8});  // flattened: slivers and needles
+    sets.emplace_back(s.begin(), s.end());
+  }
+  int compared = 0, differing_from_unfiltered = 0;
+  for (auto& pts : sets) {
+    std::sort(pts.begin(), pts.end());
+    pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+    const auto dt = delaunay(pts);
+    const auto scale = local_scale(pts, dt, 6);
+    ReconParams base;
+    base.peel = false;
+    base.multipliers = {1024};
+    const auto unfiltered = rule_labels(pts, dt, scale, base);
+    const auto unfiltered_flags = candidate_flags(pts, dt, scale, base);
+    CHECK(unfiltered == plain_rule(pts, dt, scale, base).inside);
+    // Neighbour ratios above 256 remove a face unless some neighbour is much
+    // flatter than it: a face compared with itself would always fail.
+    const std::array<std::uint32_t, kFilterCount> strong{256, 64, 512, 1, 1024, 75};
+    for (int mask : {1, 2, 4, 8, 16, 32, 3, 12, 48, 21, 42, 63}) {  // each filter alone, pairs, all
+      for (std::uint32_t scale_up : {1u, 4u}) {
+        ReconParams p = base;
+        for (int f = 0; f < kFilterCount; ++f)
+          if (mask >> f & 1) p.filters[static_cast<std::size_t>(f)] = f == kLone ? 1 : strong[static_cast<std::size_t>(f)] * scale_up;
+        if (scale_up == 4) {  // two alpha classes as well
+          p.multipliers = {512, 2048};
+          p.vertex_class.assign(pts.size(), 0);
+          for (std::size_t v = 0; v < pts.size(); v += 3) p.vertex_class[v] = 1;
+        }
+        CAPTURE(mask);
+        CAPTURE(scale_up);
+        const auto plain = plain_rule(pts, dt, scale, p);
+        const auto flags = candidate_flags(pts, dt, scale, p);
+        CHECK(flags == plain.candidates);
+        const auto got = rule_labels(pts, dt, scale, p);
+        CHECK(got == plain.inside);
+        ++compared;
+        differing_from_unfiltered += flags != unfiltered_flags;
+      }
+    }
+  }
+  CHECK(compared == 3 * 12 * 2);
+  CHECK(differing_from_unfiltered > compared * 3 / 4);  // the filters do remove candidates
 }
 
 TEST_CASE("filters only remove candidate faces, and their RCON syntax is checked") {

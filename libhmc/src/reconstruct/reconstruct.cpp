@@ -85,41 +85,31 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
                    const std::vector<std::uint64_t>& scale, const ReconParams& p, std::vector<std::uint8_t>& cand) {
   const auto& th = p.filters;
   const std::size_t nt = dt.tets.size();
-  // Unique faces: sort (sorted triple, slot) and give each face an id. The
-  // triple (a, b, c) is kept as (a·2^32 + b, c): integer comparisons.
-  struct Slot {
-    std::uint64_t ab;
-    std::uint32_t c, slot;
-    bool same_face(const Slot& o) const { return ab == o.ab && c == o.c; }
-  };
-  std::vector<Slot> slots;
-  slots.reserve(nt * 4);
+  // Unique faces from the adjacency: a face is listed at the first of its
+  // slots, in (tetrahedron, local face) order, with its twin slot across it.
+  // Both slots of a face pass or fail the edge test together (same edges,
+  // same limits), so a face whose neighbour comes first was listed there.
+  // Its vertices are kept as the sorted triple. Everything below depends on
+  // the faces' values, not on the order of their ids.
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  std::vector<std::array<std::uint32_t, 2>> face_slots;  // slot, twin slot (or ~0)
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k) {
       const std::size_t s = t * 4 + static_cast<std::size_t>(k);
       if (!cand[s]) continue;
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && u < t) continue;  // listed from u
+      std::uint32_t twin = ~0u;
+      if (u != kNoTet) {
+        int m = 0;
+        while (m < 3 && dt.neighbors[u][m] != t) ++m;
+        twin = static_cast<std::uint32_t>(std::size_t{u} * 4 + static_cast<std::size_t>(m));
+      }
       auto f = face_of(dt, t, k);
       std::sort(f.begin(), f.end());
-      slots.push_back({std::uint64_t{f[0]} << 32 | f[1], f[2], static_cast<std::uint32_t>(s)});
+      faces.push_back(f);
+      face_slots.push_back({static_cast<std::uint32_t>(s), twin});
     }
-  std::sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
-    return a.ab != b.ab ? a.ab < b.ab : a.c != b.c ? a.c < b.c : a.slot < b.slot;
-  });
-  std::size_t unique = 0;
-  for (std::size_t i = 0; i < slots.size(); ++i) unique += i == 0 || !slots[i].same_face(slots[i - 1]);
-  std::vector<std::array<std::uint32_t, 3>> faces;
-  faces.reserve(unique);
-  std::vector<std::uint32_t> face_of_slot(slots.size()), slot_ids(slots.size());
-  for (std::size_t i = 0; i < slots.size(); ++i) {
-    if (i == 0 || !slots[i].same_face(slots[i - 1]))
-      faces.push_back(
-          {static_cast<std::uint32_t>(slots[i].ab >> 32), static_cast<std::uint32_t>(slots[i].ab), slots[i].c});
-    face_of_slot[i] = static_cast<std::uint32_t>(faces.size() - 1);
-    slot_ids[i] = slots[i].slot;
-  }
-  // Only the slot numbers are needed from here on: free the keys (the
-  // filters' working memory is most of a decoder's peak).
-  std::vector<Slot>().swap(slots);
   const std::size_t nf = faces.size();
   // A face's parts are recomputed from its vertices whenever they are
   // needed (a few products): storing them would cost 48 bytes per face,
@@ -143,21 +133,49 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
   // Edge adjacency among the faces kept so far, for the neighbour filters.
   const bool neighbours = th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio];
   if (neighbours) {
-    // 12 bytes per reference (an edge is the vertex pair (a, b), a < b).
+    // A reference is the edge (a, b), a < b, and a face on it, packed as
+    // a·2^(wv + wf) + b·2^wf + face when that fits in 64 bits (8 bytes, one
+    // integer sort), else as three words.
     struct EdgeRef {
       std::uint32_t a, b, face;
     };
-    std::vector<EdgeRef> refs;
-    refs.reserve(3 * static_cast<std::size_t>(std::count(keep.begin(), keep.end(), std::uint8_t{1})));
+    int wv = 1, wf = 1;
+    while (wv < 32 && ((pts.size() - 1) >> wv) != 0) ++wv;
+    while (wf < 32 && ((nf - 1) >> wf) != 0) ++wf;
+    const bool packed = 2 * wv + wf <= 64;
+    std::vector<std::uint64_t> keys;
+    std::vector<EdgeRef> wide;
+    const auto kept = static_cast<std::size_t>(std::count(keep.begin(), keep.end(), std::uint8_t{1}));
+    if (packed)
+      keys.reserve(3 * kept);
+    else
+      wide.reserve(3 * kept);
     for (std::uint32_t i = 0; i < nf; ++i) {
       if (!keep[i]) continue;
       const auto& f = faces[i];
       for (int a = 0; a < 3; ++a)
-        for (int b = a + 1; b < 3; ++b) refs.push_back({f[a], f[b], i});
+        for (int b = a + 1; b < 3; ++b) {
+          if (packed)
+            keys.push_back(std::uint64_t{f[a]} << (wv + wf) | std::uint64_t{f[b]} << wf | i);
+          else
+            wide.push_back({f[a], f[b], i});
+        }
     }
-    std::sort(refs.begin(), refs.end(), [](const EdgeRef& x, const EdgeRef& y) {
-      return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.face < y.face;
-    });
+    if (packed) {
+      std::sort(keys.begin(), keys.end());
+    } else {
+      std::sort(wide.begin(), wide.end(), [](const EdgeRef& x, const EdgeRef& y) {
+        return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.face < y.face;
+      });
+    }
+    const std::size_t nrefs = packed ? keys.size() : wide.size();
+    auto ref = [&](std::size_t r) -> EdgeRef {
+      if (!packed) return wide[r];
+      const std::uint64_t x = keys[r];
+      return {static_cast<std::uint32_t>(x >> (wv + wf)),
+              static_cast<std::uint32_t>((x >> wf) & ((std::uint64_t{1} << wv) - 1)),
+              static_cast<std::uint32_t>(x & ((std::uint64_t{1} << wf) - 1))};
+    };
     // For each face: does it have a neighbour, the largest neighbour R² and
     // the largest neighbour edge ratio (as fractions compared exactly).
     std::vector<std::uint8_t> has(nf, 0);
@@ -174,30 +192,68 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
       return xn * yd < yn * xd;
     };
-    std::vector<TriangleParts> group;  // the parts of the faces around one edge
-    for (std::size_t i = 0; i < refs.size();) {
+    // R² as a double decides a comparison when the two differ by more than
+    // 10^-12 relatively (its own error is below 6·2^-53: exact edges, two
+    // roundings for N, three for D from its two 64-bit halves, one for the
+    // quotient); closer ones, and infinite radii (D = 0), go to the exact
+    // test.
+    struct Face {
+      TriangleParts p;
+      double r2;
+    };
+    auto face = [&](std::uint32_t f) {
+      const TriangleParts t = parts(f);
+      const double n = static_cast<double>(t.e[0]) * static_cast<double>(t.e[1]) * static_cast<double>(t.e[2]);
+      const double d = static_cast<double>(hi(t.d)) * 18446744073709551616.0 + static_cast<double>(lo(t.d));
+      return Face{t, t.d == 0 ? 0.0 : n / d};
+    };
+    auto r_below = [&](const Face& a, const Face& b) {  // R²(a) < R²(b)
+      if (a.p.d != 0 && b.p.d != 0) {
+        if (a.r2 < b.r2 * (1 - 1e-12)) return true;
+        if (a.r2 > b.r2 * (1 + 1e-12)) return false;
+      }
+      return r_less(a.p, b.p);
+    };
+    std::vector<Face> group;            // the faces on one edge
+    std::vector<std::uint32_t> around;  // their ids
+    for (std::size_t i = 0; i < nrefs;) {
+      const EdgeRef first = ref(i);
       std::size_t j = i;
-      while (j < refs.size() && refs[j].a == refs[i].a && refs[j].b == refs[i].b) ++j;
-      if (j - i > 1) {
+      around.clear();
+      for (; j < nrefs; ++j) {
+        const EdgeRef e = ref(j);
+        if (e.a != first.a || e.b != first.b) break;
+        around.push_back(e.face);
+      }
+      const std::size_t g = j - i;
+      if (g > 1) {
         group.clear();
-        for (std::size_t a = i; a < j; ++a) group.push_back(parts(refs[a].face));
-        for (std::size_t a = i; a < j; ++a) {
-          const std::uint32_t f = refs[a].face;
+        for (std::uint32_t f : around) group.push_back(face(f));
+        // A face's best neighbour around this edge is the first largest
+        // among the others: the first largest of all (r1, q1), or for that
+        // face itself the first largest of the rest (r2, q2).
+        std::size_t r1 = 0, q1 = 0, r2 = g, q2 = g;
+        for (std::size_t b = 1; b < g; ++b) {
+          if (r_below(group[r1], group[b])) r1 = b;
+          if (ratio_less(group[q1].p, group[b].p)) q1 = b;
+        }
+        for (std::size_t b = 0; b < g; ++b) {
+          if (b != r1 && (r2 == g || r_below(group[r2], group[b]))) r2 = b;
+          if (b != q1 && (q2 == g || ratio_less(group[q2].p, group[b].p))) q2 = b;
+        }
+        for (std::size_t a = 0; a < g; ++a) {
+          const std::uint32_t f = around[a];
           has[f] = 1;
-          // The best neighbour around this edge, then against the best so far.
-          std::size_t br = j, bq = j;
-          for (std::size_t b = i; b < j; ++b) {
-            if (a == b) continue;
-            if (br == j || r_less(group[br - i], group[b - i])) br = b;
-            if (bq == j || ratio_less(group[bq - i], group[b - i])) bq = b;
-          }
-          if (max_r[f] == ~0u || r_less(parts(max_r[f]), group[br - i])) max_r[f] = refs[br].face;
-          if (max_ratio[f] == ~0u || ratio_less(parts(max_ratio[f]), group[bq - i])) max_ratio[f] = refs[bq].face;
+          // Then against the best so far.
+          const std::size_t br = a == r1 ? r2 : r1, bq = a == q1 ? q2 : q1;
+          if (max_r[f] == ~0u || r_below(face(max_r[f]), group[br])) max_r[f] = around[br];
+          if (max_ratio[f] == ~0u || ratio_less(parts(max_ratio[f]), group[bq].p)) max_ratio[f] = around[bq];
         }
       }
       i = j;
     }
-    std::vector<EdgeRef>().swap(refs);
+    std::vector<std::uint64_t>().swap(keys);
+    std::vector<EdgeRef>().swap(wide);
     std::vector<std::uint8_t> next = keep;
     for (std::uint32_t f = 0; f < nf; ++f) {
       if (!keep[f]) continue;
@@ -228,8 +284,10 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     }
     keep.swap(next);
   }
-  for (std::size_t i = 0; i < slot_ids.size(); ++i)
-    if (!keep[face_of_slot[i]]) cand[slot_ids[i]] = 0;
+  for (std::size_t f = 0; f < nf; ++f)
+    if (!keep[f])
+      for (std::uint32_t slot : face_slots[f])
+        if (slot != ~0u) cand[slot] = 0;
 }
 
 // Local soundness of the interface around vertex v: 1 if v should be on it
@@ -574,12 +632,10 @@ int compare_circumradius(const std::vector<GridPoint>& pts, const std::array<std
   return compare(na.mul(bh, bl), nb.mul(ah, al));
 }
 
-std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                                      const std::vector<std::uint64_t>& scale, const ReconParams& p) {
+std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                          const std::vector<std::uint64_t>& scale, const ReconParams& p) {
   const std::size_t nt = dt.tets.size();
   const auto lim = limits(scale, p);
-  std::vector<std::uint8_t> inside(nt, 1);
-  // Candidate flags per (tet, local face), computed once.
   std::vector<std::uint8_t> cand(nt * 4);
   for (std::size_t t = 0; t < nt; ++t) {
     const unsigned faces = candidate_faces(points, lim, dt.tets[t]);
@@ -588,6 +644,14 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   bool any_filter = false;
   for (auto f : p.filters) any_filter |= f != 0;
   if (any_filter) apply_filters(points, dt, scale, p, cand);
+  return cand;
+}
+
+std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                      const std::vector<std::uint64_t>& scale, const ReconParams& p) {
+  const std::size_t nt = dt.tets.size();
+  std::vector<std::uint8_t> inside(nt, 1);
+  const std::vector<std::uint8_t> cand = candidate_flags(points, dt, scale, p);
 
   // Flood from outside the hull through non-candidate faces.
   std::vector<std::uint32_t> stack;

@@ -74,6 +74,12 @@ struct Reconstruction {
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        std::uint32_t rank);
 
+/// Candidate flag of every face slot, indexed 4·tetrahedron + local face:
+/// the edge test against the alpha limits (spec 11.2) and the filters
+/// (11.2a). Both slots of a face carry the same flag.
+std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                                          const std::vector<std::uint64_t>& scale, const ReconParams& p);
+
 /// The labels of the rule before toggles (flood from the hull through
 /// non-candidate faces, then peeling).
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
