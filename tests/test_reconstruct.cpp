@@ -947,7 +947,6 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
   const auto fine_labels = truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces, &cache);
   CHECK(fine_labels == truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces));
   CHECK(cache.entries.size() == dt_fine.tets.size());
-  CHECK(static_cast<bool>(cache.tree));  // the surface's tree, built once
   // Tetrahedra the coarser level keeps: the cache answers for them.
   std::size_t kept = 0;
   for (const auto& t : dt_coarse.tets) {
@@ -976,7 +975,6 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
     for (auto& c : p) c *= 1024;
   const auto dt_big = delaunay(big);
   WindingCache big_cache = cache;
-  big_cache.tree.reset();  // the tree is the unscaled surface's
   CHECK(truth_labels(big, dt_big, big_surface, m.triangles, no_faces, &big_cache) ==
         truth_labels(big, dt_big, big_surface, m.triangles, no_faces));
   CHECK(big_cache.entries.empty());

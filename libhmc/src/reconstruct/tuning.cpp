@@ -292,9 +292,7 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
                                        const std::vector<Triangle>& input_faces_on_points, WindingCache* cache) {
   const std::size_t nt = dt.tets.size();
-  std::shared_ptr<const WindingNumber> own;
-  if (!cache || !cache->tree) own = std::make_shared<const WindingNumber>(surface_points, surface);
-  const WindingNumber& wn = own ? *own : *cache->tree;
+  WindingNumber wn(surface_points, surface);
   std::vector<double> w(nt);
   // Tetrahedra in the Morton order of their first vertex (12 bits per
   // axis): consecutive queries then open the same clusters of the winding
@@ -344,7 +342,6 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
     w[t] = std::abs(wn(c));
   }
   if (cache) {
-    if (own) cache->tree = std::move(own);
     std::vector<Entry>().swap(cache->entries);  // this level's replace the previous level's
     cache->field = field;
     if (use_cache) {

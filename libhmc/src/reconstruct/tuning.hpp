@@ -5,13 +5,11 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include "delaunay/delaunay.hpp"
 #include "hmc/codec.hpp"
 #include "reconstruct/reconstruct.hpp"
-#include "reconstruct/winding.hpp"
 
 namespace hmc::detail {
 
@@ -33,11 +31,9 @@ struct GridMesh {
 /// for the same surface: a tetrahedron's centroid, hence its winding
 /// number, depends only on its four points, and a coarser level keeps many
 /// of a finer level's tetrahedra (38-69 % on the Stanford bunny and
-/// hand_tetgen at 4 levels). It also keeps the surface's winding-number
-/// tree, built on the first call. It must not be shared between calls with
+/// hand_tetgen at 4 levels). It must not be shared between calls with
 /// different surfaces.
 struct WindingCache {
-  std::shared_ptr<const WindingNumber> tree;
   /// Bits per axis of the packed keys: 2 more than the coordinates need.
   int field = 0;
   /// (4 × centroid in grid units, x·2^(2·field) + y·2^field + z;

@@ -73,16 +73,15 @@ class HalfAngleSum {
 
 }  // namespace
 
-WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles) {
-  tri_.reserve(triangles.size());
-  for (const auto& t : triangles) tri_.push_back({points[t[0]], points[t[1]], points[t[2]]});
+WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles)
+    : points_(points), tri_(triangles) {
   order_.resize(tri_.size());
   for (std::uint32_t i = 0; i < order_.size(); ++i) order_[i] = i;
   nodes_.reserve(2 * tri_.size() / kLeafSize + 2);
   nodes_.push_back({});  // index 0 is never a child, so left == 0 marks a leaf
   if (!tri_.empty()) build(0, static_cast<std::uint32_t>(tri_.size()));
   // The triangles in tree order, so that a leaf's lie side by side.
-  std::vector<std::array<Vec3, 3>> in_order(tri_.size());
+  std::vector<Triangle> in_order(tri_.size());
   for (std::size_t i = 0; i < order_.size(); ++i) in_order[i] = tri_[order_[i]];
   tri_.swap(in_order);
   std::vector<std::uint32_t>().swap(order_);
@@ -97,7 +96,7 @@ std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
   double total = 0;
   Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   for (std::uint32_t i = begin; i < end; ++i) {
-    const auto& t = tri_[order_[i]];
+    const auto t = corners(order_[i]);
     const Vec3 av = cross(sub(t[1], t[0]), sub(t[2], t[0]));
     const double w = 0.5 * norm(av);
     for (int a = 0; a < 3; ++a) {
@@ -117,7 +116,7 @@ std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
   // (v - c) ⊗ (v - c), c the centroid.
   double m[3][3] = {}, t3[3][3][3] = {};
   for (std::uint32_t i = begin; i < end; ++i) {
-    const auto& t = tri_[order_[i]];
+    const auto t = corners(order_[i]);
     for (const auto& v : t) n.radius = std::max(n.radius, norm(sub(v, n.centre)));
     const Vec3 av = cross(sub(t[1], t[0]), sub(t[2], t[0]));
     Vec3 c, e;
@@ -161,7 +160,10 @@ std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
     for (int a = 1; a < 3; ++a)
       if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
     const std::uint32_t mid = begin + (end - begin) / 2;
-    auto key = [&](std::uint32_t i) { return tri_[i][0][axis] + tri_[i][1][axis] + tri_[i][2][axis]; };
+    auto key = [&](std::uint32_t i) {
+      const auto& t = tri_[i];
+      return points_[t[0]][axis] + points_[t[1]][axis] + points_[t[2]][axis];
+    };
     std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
                      [&](std::uint32_t x, std::uint32_t y) { return key(x) < key(y); });
     n.left = build(begin, mid);
@@ -190,7 +192,7 @@ double WindingNumber::query(std::uint32_t id, const Vec3& q) const {
   }
   if (n.left == 0) {
     HalfAngleSum s;
-    for (std::uint32_t i = n.begin; i < n.end; ++i) s.add(half_angle(tri_[i], q));
+    for (std::uint32_t i = n.begin; i < n.end; ++i) s.add(half_angle(corners(i), q));
     return 2 * s.value();
   }
   return query(n.left, q) + query(n.right, q);

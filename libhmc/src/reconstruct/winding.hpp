@@ -18,7 +18,8 @@ namespace hmc::detail {
 class WindingNumber {
  public:
   /// `triangles` index `points`; orientation gives the sign (counter-
-  /// clockwise seen from outside: +1 inside a closed surface).
+  /// clockwise seen from outside: +1 inside a closed surface). `points`
+  /// must outlive this object (the tree keeps only the triangles' indices).
   WindingNumber(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles);
   /// Winding number at q (1 inside, 0 outside a closed oriented surface).
   double operator()(const Vec3& q) const;
@@ -42,7 +43,13 @@ class WindingNumber {
   std::uint32_t build(std::uint32_t begin, std::uint32_t end);
   double query(std::uint32_t node, const Vec3& q) const;
 
-  std::vector<std::array<Vec3, 3>> tri_;  // in tree order once built
+  std::array<Vec3, 3> corners(std::uint32_t i) const {
+    const auto& t = tri_[i];
+    return {points_[t[0]], points_[t[1]], points_[t[2]]};
+  }
+
+  const std::vector<Vec3>& points_;
+  std::vector<Triangle> tri_;             // in tree order once built
   std::vector<std::uint32_t> order_;      // tri_ indices in tree order, while building
   std::vector<Node> nodes_;
 };
