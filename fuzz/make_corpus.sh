@@ -7,8 +7,9 @@
 # without the info chunk. The other targets' seeds are cut from those
 # streams, and hand-made edge cases are added (empty and cut streams, bad
 # CRC, unknown and out-of-order chunks, VQTB, single-symbol octree codes,
-# NaN and halfway coordinates, ...). Deterministic: running it again gives
-# the same files.
+# NaN and halfway coordinates, ...). The mesh readers' seeds (meshio) are
+# the writers' output for a small torus and hand-made files in every format
+# the library reads. Deterministic: running it again gives the same files.
 #
 # usage: fuzz/make_corpus.sh            (uses build/bin/hmc, or $HMC)
 set -eu
