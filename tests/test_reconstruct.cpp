@@ -442,7 +442,10 @@ PlainRule plain_rule(const std::vector<GridPoint>& pts, const Tetrahedralization
     r.e[1] = dist2(pts[f[2]], pts[f[0]]);
     r.e[2] = dist2(pts[f[0]], pts[f[1]]);
     std::int64_t u[3], w[3];
-    for (int a = 0; a < 3; ++a) u[a] = std::int64_t{pts[f[1]][a]} - pts[f[0]][a], w[a] = std::int64_t{pts[f[2]][a]} - pts[f[0]][a];
+    for (int a = 0; a < 3; ++a) {
+      u[a] = std::int64_t{pts[f[1]][a]} - pts[f[0]][a];
+      w[a] = std::int64_t{pts[f[2]][a]} - pts[f[0]][a];
+    }
     r.d = 0;
     for (int a = 0; a < 3; ++a) {
       const std::int64_t c = u[(a + 1) % 3] * w[(a + 2) % 3] - u[(a + 2) % 3] * w[(a + 1) % 3];
@@ -450,7 +453,9 @@ PlainRule plain_rule(const std::vector<GridPoint>& pts, const Tetrahedralization
     }
     return r;
   };
-  auto wide = [](U128 x) { return U256::from(1).mul(static_cast<std::uint64_t>(x >> 64), static_cast<std::uint64_t>(x)); };
+  auto wide = [](U128 x) {
+    return U256::from(1).mul(static_cast<std::uint64_t>(x >> 64), static_cast<std::uint64_t>(x));
+  };
   std::vector<std::uint8_t> cand(nf, 1);
   for (std::size_t f = 0; f < nf; ++f)
     for (int a = 0; a < 3; ++a) {
@@ -498,9 +503,10 @@ PlainRule plain_rule(const std::vector<GridPoint>& pts, const Tetrahedralization
         if (static_cast<U128>(flat.emin()) * tg.emax() < static_cast<U128>(tg.emin()) * flat.emax()) flat = tg;
       }
       if (th[kNeighbourRadius] && big.d != 0 &&
-          (tf.d == 0 ||
-           compare(tf.n().mul(static_cast<std::uint64_t>(big.d >> 64), static_cast<std::uint64_t>(big.d)).mul(256),
-                   big.n().mul(static_cast<std::uint64_t>(tf.d >> 64), static_cast<std::uint64_t>(tf.d)).mul(th[kNeighbourRadius])) > 0))
+          (tf.d == 0 || compare(tf.n().mul(static_cast<std::uint64_t>(big.d >> 64), static_cast<std::uint64_t>(big.d))
+                                    .mul(256),
+                                big.n().mul(static_cast<std::uint64_t>(tf.d >> 64), static_cast<std::uint64_t>(tf.d))
+                                    .mul(th[kNeighbourRadius])) > 0))
         next[f] = 0;
       if (th[kNeighbourRatio] &&
           compare(wide(static_cast<U128>(tf.emin()) * flat.emax()).mul(256),
@@ -517,7 +523,10 @@ PlainRule plain_rule(const std::vector<GridPoint>& pts, const Tetrahedralization
   std::vector<std::uint32_t> stack;
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k)
-      if (dt.neighbors[t][k] == kNoTet && !keep[face_of[t][k]] && inside[t]) inside[t] = 0, stack.push_back(static_cast<std::uint32_t>(t));
+      if (dt.neighbors[t][k] == kNoTet && !keep[face_of[t][k]] && inside[t]) {
+        inside[t] = 0;
+        stack.push_back(static_cast<std::uint32_t>(t));
+      }
   while (!stack.empty()) {
     const std::uint32_t t = stack.back();
     stack.pop_back();
@@ -571,7 +580,8 @@ TEST_CASE("the candidate filters give the plainly written rule's labels") {
       for (std::uint32_t scale_up : {1u, 4u}) {
         ReconParams p = base;
         for (int f = 0; f < kFilterCount; ++f)
-          if (mask >> f & 1) p.filters[static_cast<std::size_t>(f)] = f == kLone ? 1 : strong[static_cast<std::size_t>(f)] * scale_up;
+          if (mask >> f & 1)
+            p.filters[static_cast<std::size_t>(f)] = f == kLone ? 1 : strong[static_cast<std::size_t>(f)] * scale_up;
         if (scale_up == 4) {  // two alpha classes as well
           p.multipliers = {512, 2048};
           p.vertex_class.assign(pts.size(), 0);
