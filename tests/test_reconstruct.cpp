@@ -518,22 +518,17 @@ PlainRule plain_rule(const std::vector<GridPoint>& pts, const Tetrahedralization
   PlainRule out;
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k) out.candidates.push_back(keep[face_of[t][static_cast<std::size_t>(k)]]);
-  // Flood from outside the hull through faces that are not candidates.
+  // Outside (spec 11.3): the smallest set holding every tetrahedron with a
+  // hull face that is not a candidate and closed under crossing faces that
+  // are not candidates, reached as a fixed point of whole passes.
   std::vector<std::uint8_t> inside(nt, 1);
-  std::vector<std::uint32_t> stack;
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k)
-      if (dt.neighbors[t][k] == kNoTet && !keep[face_of[t][k]] && inside[t]) {
-        inside[t] = 0;
-        stack.push_back(static_cast<std::uint32_t>(t));
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4 && inside[t]; ++k) {
+        const std::uint32_t u = dt.neighbors[t][k];
+        if (!keep[face_of[t][k]] && (u == kNoTet || !inside[u])) inside[t] = 0, changed = true;
       }
-  while (!stack.empty()) {
-    const std::uint32_t t = stack.back();
-    stack.pop_back();
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      if (u != kNoTet && inside[u] && !keep[face_of[t][k]]) inside[u] = 0, stack.push_back(u);
-    }
   }
   out.inside = std::move(inside);
   return out;
