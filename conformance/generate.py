@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x0b"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x0c"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -381,9 +381,10 @@ def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1):
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
 
-def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1):
+def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None):
     """§8A.1 conditional octree coder (planes = 2: coder 2, §8A.3, with the
-    plane context), written from the decoder's ranking (refdec.child_order).
+    plane context; gap not None: coder 3, §8A.4, with that weight and planes
+    1 or 2), written from the decoder's ranking (refdec.child_order).
     coarse: C in canonical order; added: A."""
     coarse = sorted(coarse)
     occ = [set() for _ in range(q + 1)]
@@ -403,7 +404,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
         kids = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1)) for c in range(8)]
         m = sum(1 << c for c in range(8) if kids[c] in occ[d + 1])
         j = min(bin(m).count("1"), classes - 1)
-        pi, split = refdec.child_order(node, d, q, m, coarse, nb, neighbours, want_split=True)
+        pi, split = refdec.child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=gap or 0)
         x = 1 if planes == 2 and split >= 2 else 0
         rho = sum(1 << r for r in range(8) if kids[pi[r]] in aocc[d + 1])
         seq.append((d, (j, x), refdec.E.index(rho)))
@@ -416,6 +417,9 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     bw = BitWriter()
     bw.put(neighbours, 4)
     bw.put(classes - 1, 2)
+    if gap is not None:
+        bw.put(planes - 1, 1)
+        bw.put(gap, 4)
     coder = {}
     for j in slots:
         prev = None
@@ -447,7 +451,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
                 current[(d, j)] = current[(d - 1, j)]
     for (d, j, s) in seq:
         current[(d, j)].put(bw, s)
-    return bytes([2 if planes == 2 else 0]) + bw.bytes()
+    return bytes([3 if gap is not None else 2 if planes == 2 else 0]) + bw.bytes()
 
 
 def zigzag(v):
@@ -1006,7 +1010,8 @@ def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), 
         added = sorted(set(levels[i]) - set(levels[i - 1]))
         nb, cl, share = refn_opts[i - 1][:3]
         planes = refn_opts[i - 1][3] if len(refn_opts[i - 1]) > 3 else 1
-        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes)])
+        gap = refn_opts[i - 1][4] if len(refn_opts[i - 1]) > 4 else None
+        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes, gap=gap)])
         if rcons:
             ch.append(["RCON", rcons[i]])
     ch.append(["HEND", b""])
@@ -1136,6 +1141,17 @@ def hb_refn_planes():
     with delta_tables():
         b = hand_stream(0, 9, lv[:2], [(4, 3, True, 2)])
     return a, b
+
+
+def hb_refn_gap():
+    # REFN coder 3 (gap ranking): neighbours 4, G = 6 with plane contexts and
+    # 4 classes; G = 15 without plane contexts, 2 classes, unshared tables;
+    # neighbours 1 with G = 9 (no plane: the order of 8A.1); neighbours 15,
+    # G = 1. Added points are the points of the next level, spread by taking
+    # them in random order, as the other hand-built cases do.
+    pts = sphere_pts(500, 10, 81)
+    lv = nested(pts, [80, 200, 300, 420, 500], 82)
+    return hand_stream(0, 10, lv, [(4, 4, True, 2, 6), (4, 2, False, 1, 15), (1, 3, True, 2, 9), (15, 1, True, 1, 1)])
 
 
 def hb_base_ranked_sphere():
@@ -1300,6 +1316,8 @@ HANDBUILT = [
      "REFN coder 2 (plane contexts): neighbours 4 with 4 and 2 classes, shared and unshared tables, then neighbours 0 (every node in plane context 0)", sec("refn", "huff")),
     ("refn-planes-delta-tables", lambda: hb_refn_planes()[1], P,
      "REFN coder 2 with three classes, its tables in the delta form", sec("head", "refn", "huff")),
+    ("refn-gap", hb_refn_gap, P,
+     "REFN coder 3 (gap ranking): neighbours 4 with G = 6, plane contexts, 4 classes; G = 15 without plane contexts, 2 classes, unshared tables; neighbours 1 with G = 9 (no plane, the order of 8A.1); neighbours 15 with G = 1", sec("refn", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
      "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
@@ -1548,8 +1566,10 @@ NEGATIVE = [
      lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
     ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
-    ("neg-refn-coder", "bad_layer", P, "REFN coder 3", ["8A", "13"],
-     lambda: stream_q1_refn(b"\x03" + refn_single(0)[1:])),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 4", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x04" + refn_single(0)[1:])),
+    ("neg-refn-gap-header-cut", "bad_layer", P, "REFN coder 3 whose payload ends inside the gap field (one data byte: neighbours, classes, planes and one bit of G)", ["8A.4", "13"],
+     lambda: stream_q1_refn(b"\x03" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 1))))),
     ("neg-vq-no-vqtb", "bad_layer", P, "a REFN of coder 1 in a stream without VQTB", ["8A.2", "13"],
      lambda: vq_neg(drop_vqtb=True)),
     ("neg-vq-anchor-range", "bad_layer", P, "coder 1: an anchor equal to the number of coarse points", ["8A.2", "13"],

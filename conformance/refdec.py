@@ -388,9 +388,10 @@ def ring(cx, cy, cz, r):
                 yield (cx + dx, cy + dy, cz + r)
 
 
-def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False):
+def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0):
     """§8A.1 ranking: returns pi, pi[r] = child at rank r (and, with
-    want_split, how many children lie on the plane's smaller side, §8.2)."""
+    want_split, how many children lie on the plane's smaller side, §8.2).
+    gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1."""
     X, Y, Z = node
     h = 1 << (q - d)
     O = (2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h)
@@ -419,6 +420,7 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False):
         if A[a][a] > A[j][j]:
             j = a
     n = reduce_bits([A[0][j], A[1][j], A[2][j]], 20)
+    N = n[0] * n[0] + n[1] * n[1] + n[2] * n[2]
     keys = []
     above = below = 0
     for c in range(8):
@@ -429,9 +431,13 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False):
         above += dot > 0
         below += dot < 0
         e = V[0] * V[0] + V[1] * V[1] + V[2] * V[2]
-        keys.append((1 - (m >> c & 1), abs(dot), e, c))
+        # §8A.4: kappa = 32 t^2 - G k^2 N g, g the squared distance from U to
+        # the nearest neighbour (0 without neighbours)
+        g = min((sum((U[a] - p[a]) ** 2 for a in range(3)) for p in P), default=0)
+        kappa = 32 * dot * dot - gap * k * k * N * g
+        keys.append((1 - (m >> c & 1), kappa, abs(dot), e, c))
     keys.sort()
-    pi = [key[3] for key in keys]
+    pi = [key[4] for key in keys]
     return (pi, min(above, below)) if want_split else pi
 
 
@@ -442,12 +448,16 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
         return decode_vq(payload, q, coarse, n, codebook, form)
-    if payload[0] not in (0, 2):
+    if payload[0] not in (0, 2, 3):
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     planes = 2 if payload[0] == 2 else 1  # §8A.3: coder 2 adds the plane context
     br = BitReader(payload, 1, "bad_layer", "REFN")
     neighbours = br.bits(4)
     classes = br.bits(2) + 1
+    gap = 0
+    if payload[0] == 3:  # §8A.4: the plane contexts and the gap weight
+        planes = br.bits(1) + 1
+        gap = br.bits(4)
     table = [[[None] * planes for _ in range(classes)] for _ in range(q)]
     for d in range(q):
         for j in range(classes):
@@ -473,7 +483,7 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
             if kids[c] in occ[d + 1]:
                 m |= 1 << c
         w = bin(m).count("1")
-        pi, split = child_order(node, d, q, m, coarse, nb, neighbours, want_split=True)
+        pi, split = child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=gap)
         x = 1 if planes == 2 and split >= 2 else 0
         T = table[d][min(w, classes - 1)][x]
         if T is None:

@@ -3,13 +3,15 @@
 // bits, against a coarser level built from the input.
 //
 // Input: u8 q (mapped to 1..21), u8 coarse count c (1..64), c points of
-// 3 x u24 (masked to the grid), u16 added count n (1..4096), u8 coder (bit
-// 0: coder 2, plane contexts, else coder 0), then the REFN bit stream
+// 3 x u24 (masked to the grid), u16 added count n (1..4096), u8 coder (its
+// value mod 3: 0 coder 0, 1 coder 2 with plane contexts, 2 coder 3 with plane
+// contexts and gap ranking), then the REFN bit stream
 // (without its coder byte). Checks: only bad_layer /
 // bad_huffman_table are raised; a decoded layer has exactly n distinct new
 // points on the grid, none in the coarser level, in canonical order; coding
 // them again decodes to the same points.
 #include <algorithm>
+#include <array>
 #include <vector>
 
 #include "fuzz_check.hpp"
@@ -21,12 +23,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   int q = 0;
   const std::vector<hmc::GridPoint> coarse = hmc_fuzz::read_coarse_level(params, q);
   const std::uint64_t n = 1 + params.u16() % 4096;
-  const bool planes = params.u8() & 1;
+  const hmc::detail::OctreeCoder coder = std::array<hmc::detail::OctreeCoder, 3>{
+      hmc::detail::OctreeCoder::plain, hmc::detail::OctreeCoder::planes, hmc::detail::OctreeCoder::gap}[params.u8() % 3];
 
   std::vector<hmc::GridPoint> added;
   try {
     added = hmc::detail::decode_refinement(params.rest(), params.rest_size(), q, coarse, n, hmc::detail::TableForm::deltas,
-                                           planes);
+                                           coder);
   } catch (const hmc::detail::StreamError& e) {
     const hmc::Status s = e.error().status;
     FUZZ_CHECK(s == hmc::Status::bad_layer || s == hmc::Status::bad_huffman_table, "decode_refinement raised %s: %s",
@@ -38,7 +41,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::vector<hmc::GridPoint> back;
   try {
     back = hmc::detail::decode_refinement(again.bytes.data(), again.bytes.size(), q, coarse, n,
-                                          hmc::detail::TableForm::deltas, again.coder == 2);
+                                          hmc::detail::TableForm::deltas,
+                                          static_cast<hmc::detail::OctreeCoder>(again.coder));
   } catch (const hmc::detail::StreamError& e) {
     FUZZ_CHECK(false, "a re-encoded layer does not decode: %s", e.what());
   }

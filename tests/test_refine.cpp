@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <numeric>
 #include <random>
@@ -15,6 +16,7 @@
 #include "hmc/codec.hpp"
 #include "pointset/lattice_neighbours.hpp"
 #include "pointset/octree.hpp"
+#include "pointset/plane_rank.hpp"
 #include "pointset/refine.hpp"
 #include "samples.hpp"
 #include "util/kdtree.hpp"
@@ -578,8 +580,8 @@ TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the small
       RefinementParams p{k, classes};
       p.plane_contexts = true;
       const auto bytes = encode_refinement(s.coarse, s.added, q, p);
-      CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas, true) ==
-            sorted(s.added));
+      CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                              OctreeCoder::planes) == sorted(s.added));
       // Read as coder 0, the slot flags and tables no longer line up.
       Points as_plain;
       const Status st =
@@ -587,12 +589,116 @@ TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the small
       CHECK((st == Status::bad_layer || st == Status::bad_huffman_table || (st == Status::ok && as_plain != sorted(s.added))));
     }
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  REQUIRE((layer.coder == 0 || layer.coder == 2));
+  REQUIRE((layer.coder == 0 || layer.coder == 2 || layer.coder == 3));
   const auto plain = encode_refinement(s.coarse, s.added, q);
   CHECK(layer.bytes.size() <= plain.size());
   if (layer.coder == 0) CHECK(layer.bytes == plain);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                          layer.coder == 2) == sorted(s.added));
+                          static_cast<OctreeCoder>(layer.coder)) == sorted(s.added));
+}
+
+TEST_CASE("gap ranking: children far from every neighbour move up among those equally near the plane") {
+  // q = 2, the root (h = 4): child centres at doubled coordinates 2 or 6.
+  // Four neighbours on the plane z = 2 (doubled), one of them at the centre
+  // of child 0; the four children with bz = 0 lie on the plane (t = 0).
+  const Doubled nb[4] = {{0, 0, 2}, {0, 6, 2}, {6, 0, 2}, {2, 2, 2}};
+  std::array<int, 8> plain{}, gapped{}, masked{};
+  rank_children({0, 0, 0}, 0, 2, nb, 4, 0, plain);
+  rank_children({0, 0, 0}, 0, 2, nb, 4, 0, gapped, nullptr, 1);
+  rank_children({0, 0, 0}, 0, 2, nb, 4, 1u << 2, masked, nullptr, 15);
+  // Plain: on the plane first, nearest the centroid (2, 2, 2) first.
+  CHECK(plain[0] == 0);
+  // Gap: child 6, centre (6, 6, 2), lies at squared distance 32 from its
+  // nearest neighbour, children 2 and 4 at 4, child 0 at 0.
+  CHECK(gapped[0] == 6);
+  CHECK(gapped[3] == 0);
+  for (int r = 0; r < 4; ++r) CHECK((gapped[static_cast<std::size_t>(r)] & 1) == 0);  // the plane still leads
+  // Children holding coarse points still come first.
+  CHECK(masked[0] == 2);
+  CHECK(masked[1] == 6);
+}
+
+TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill the coarse level's gaps") {
+  const int q = 12;
+  // Evenly spread points on a sphere (random points, each kept unless a kept
+  // one lies within r: a scan's spacing), and as added points an independent
+  // set of their 6-nearest-neighbour graph, taken greedily in random order up
+  // to a quarter, as a level of the hierarchy removes: every neighbour of an
+  // added point is coarse, so added points lie in the coarse level's gaps.
+  const Points candidates = quantize(samples::random_sphere_points(12000, 29), q);
+  const auto dist2 = [](const GridPoint& a, const GridPoint& b) {
+    std::int64_t d2 = 0;
+    for (std::size_t i = 0; i < 3; ++i) d2 += (std::int64_t{a[i]} - b[i]) * (std::int64_t{a[i]} - b[i]);
+    return d2;
+  };
+  const std::int64_t r = 90;  // grid units: about 1,700 points kept
+  Points pts;
+  for (const GridPoint& c : candidates)
+    if (std::none_of(pts.begin(), pts.end(), [&](const GridPoint& p) { return dist2(p, c) < r * r; }))
+      pts.push_back(c);
+  std::vector<std::vector<std::size_t>> near(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    std::vector<std::size_t> others;
+    for (std::size_t j = 0; j < pts.size(); ++j)
+      if (j != i) others.push_back(j);
+    std::partial_sort(others.begin(), others.begin() + 6, others.end(), [&](std::size_t x, std::size_t y) {
+      return dist2(pts[i], pts[x]) < dist2(pts[i], pts[y]);
+    });
+    near[i].assign(others.begin(), others.begin() + 6);
+  }
+  std::vector<std::size_t> order(pts.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::shuffle(order.begin(), order.end(), std::mt19937_64(31));
+  std::vector<char> added(pts.size(), 0), blocked(pts.size(), 0);
+  std::size_t count = 0;
+  for (std::size_t i : order) {
+    if (blocked[i] || 4 * count >= pts.size()) continue;
+    added[i] = 1, ++count;
+    for (std::size_t j = 0; j < pts.size(); ++j)  // i's neighbours, and the points that list i
+      if (std::find(near[i].begin(), near[i].end(), j) != near[i].end() ||
+          std::find(near[j].begin(), near[j].end(), i) != near[j].end())
+        blocked[j] = 1;
+  }
+  const Split s = split_by(pts, [&](std::size_t i) { return added[i] != 0; });
+  REQUIRE(s.added.size() > pts.size() / 6);
+  for (int k : {0, 1, 4, 15})
+    for (int gap : {1, 7, 15})
+      for (bool planes : {false, true}) {
+        CAPTURE(k);
+        CAPTURE(gap);
+        CAPTURE(planes);
+        RefinementParams p{k, 2};
+        p.plane_contexts = planes;
+        p.gap = gap;
+        const auto bytes = encode_refinement(s.coarse, s.added, q, p);
+        CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                                OctreeCoder::gap) == sorted(s.added));
+        // Read as coder 2, the header's planes and gap fields become slot flags.
+        Points as_planes;
+        const Status st = status_of([&] {
+          as_planes = decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                                        OctreeCoder::planes);
+        });
+        CHECK((st == Status::bad_layer || st == Status::bad_huffman_table ||
+               (st == Status::ok && as_planes != sorted(s.added))));
+      }
+  // The encoder's choice: coder 3, at least 2 % smaller than the best
+  // ranking without the gap term (coders 0 and 2, 4 neighbours).
+  const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
+  CHECK(layer.coder == 3);
+  std::size_t without = SIZE_MAX;
+  for (bool planes : {false, true})
+    for (int classes = 1; classes <= 4; ++classes) {
+      RefinementParams p{4, classes};
+      p.plane_contexts = planes;
+      without = std::min(without, encode_refinement(s.coarse, s.added, q, p).size());
+    }
+  CAPTURE(without);
+  CAPTURE(layer.bytes.size());
+  MESSAGE("gap ranking: ", layer.bytes.size(), " bytes, without: ", without, " (", s.added.size(), " added points)");
+  CHECK(50 * layer.bytes.size() <= 49 * without);
+  CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                          OctreeCoder::gap) == sorted(s.added));
 }
 
 TEST_CASE("the ranked base coder's lattice neighbour search equals a k-d tree's, ties included") {

@@ -16,6 +16,7 @@ const char* refinement_coder_name(int coder) {
     case 0: return "conditional octree";
     case 1: return "anchored VQ (lossy)";
     case 2: return "conditional octree, plane contexts";
+    case 3: return "conditional octree, gap ranking";
     default: return "unknown";
   }
 }

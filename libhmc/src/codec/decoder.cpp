@@ -250,9 +250,10 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
         const std::uint64_t n = counts[k] - counts[k - 1];
         std::vector<GridPoint> added;
         const auto coder = static_cast<RefineCoder>(c.payload[0]);
-        if (coder == RefineCoder::conditional_octree || coder == RefineCoder::conditional_octree_planes) {
+        if (coder == RefineCoder::conditional_octree || coder == RefineCoder::conditional_octree_planes ||
+            coder == RefineCoder::conditional_octree_gap) {
           added = decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, n, walk.header->tables,
-                                    coder == RefineCoder::conditional_octree_planes);
+                                    static_cast<OctreeCoder>(coder));
         } else if (coder == RefineCoder::anchored_vq) {
           if (!out.vector_quantizer)
             fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");

@@ -2,6 +2,7 @@
 #include "pointset/plane_rank.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <numeric>
 
 namespace hmc::detail {
@@ -29,6 +30,8 @@ const OccupancyOrder& occupancy_order() {
 
 namespace {
 
+__extension__ typedef __int128 Int128;
+
 // sign(x) * floor(|x| / 2^s) for every value, with the smallest s that makes
 // all magnitudes fit in `bits` bits: keeps the products below exact.
 template <std::size_t N>
@@ -44,7 +47,7 @@ void reduce(std::array<std::int64_t, N>& v, int bits) {
 }  // namespace
 
 void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
-                   std::array<int, 8>& order, int* split) {
+                   std::array<int, 8>& order, int* split, int gap) {
   const std::int64_t h = std::int64_t{1} << (q - d);  // node side
   std::array<std::int64_t, 3> s{0, 0, 0};
   std::array<std::int64_t, 6> ss{};  // xx yy zz xy xz yz
@@ -87,11 +90,35 @@ void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, 
     below += dot < 0;
   }
   if (split) *split = std::min(above, below);
+  // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
+  // the squared distance from the child's centre to its nearest neighbour.
+  // t_c / (k |n|) is the child's distance to the plane, so both terms are
+  // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^101.
+  std::array<Int128, 8> kappa{};
+  const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  const bool gapped = gap > 0 && n2 > 0;
+  if (gapped) {
+    const Int128 weight = static_cast<Int128>(gap) * (k * k) * n2;
+    for (std::size_t c = 0; c < 8; ++c) {
+      std::int64_t g = INT64_MAX;
+      for (int i = 0; i < k; ++i) {
+        std::int64_t d2 = 0;
+        for (std::size_t a = 0; a < 3; ++a) {
+          const std::int64_t bit = (c >> (2 - a)) & 1;
+          const std::int64_t u = (2 * std::int64_t{p[a]} + bit) * h + h / 2 - neighbours[i][a];
+          d2 += u * u;
+        }
+        g = std::min(g, d2);
+      }
+      kappa[c] = 32 * static_cast<Int128>(t[c]) * t[c] - weight * g;
+    }
+  }
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](int a, int b) {
     const unsigned ca = (first_mask >> a) & 1u, cb = (first_mask >> b) & 1u;
     if (ca != cb) return ca > cb;
     const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+    if (gapped && kappa[ua] != kappa[ub]) return kappa[ua] < kappa[ub];
     if (t[ua] != t[ub]) return t[ua] < t[ub];
     if (e[ua] != e[ub]) return e[ua] < e[ub];
     return a < b;

@@ -33,7 +33,11 @@ using Doubled = std::array<std::int32_t, 3>;
 /// k `neighbours`, then by distance to their centroid, then by child number.
 /// `split`, when given, receives how many children lie on the smaller side
 /// of that plane (0 to 4; children on the plane count on neither side).
+/// `gap` (0 to 15, spec 8A.4): with gap G > 0 the plane distance t gives way
+/// to the key 32·t² − G·(squared distance of the child's centre to the
+/// nearest neighbour), both in units of the plane's scale, so that children
+/// far from every neighbour come earlier; gap 0 is the plain ranking.
 void rank_children(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
-                   std::array<int, 8>& order, int* split = nullptr);
+                   std::array<int, 8>& order, int* split = nullptr, int gap = 0);
 
 }  // namespace hmc::detail

@@ -19,10 +19,9 @@ namespace {
 
 constexpr int kMaxNeighbours = 15;        // 4-bit header field
 constexpr int kMaxClasses = 4;            // 2-bit header field
+constexpr int kMaxGap = 15;               // 4-bit header field of coder 3
 constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
 const char* const kWhat = "refinement layer";
-// REFN coder numbers (spec 8A) of the two forms this file codes.
-constexpr std::uint8_t kPlainCoder = 0, kPlaneCoder = 2;
 
 using Vec = std::array<std::int64_t, 3>;
 using Point32 = Doubled;
@@ -166,6 +165,8 @@ class CoarseLevel {
   std::uint32_t size() const { return static_cast<std::uint32_t>(keys_.size()); }
   /// K, the number of neighbours that predict a node's children.
   void set_neighbours(int k) { neighbours_ = k; }
+  /// G, the gap weight of coder 3's ranking (0: the plain ranking).
+  void set_gap(int g) { gap_ = g; }
 
   /// Boundaries of the coarse points of the eight children of a node at
   /// depth d holding keys_[c0, c1): child c holds keys_[b[c], b[c + 1]).
@@ -195,7 +196,7 @@ class CoarseLevel {
     const Candidates* handed = neighbours(centre, inherited, fresh, k);
     std::array<Point32, kMaxNeighbours> nb{};
     for (int i = 0; i < k; ++i) nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
-    rank_children(p, d, q_, nb.data(), k, coarse_mask, order, split);
+    rank_children(p, d, q_, nb.data(), k, coarse_mask, order, split, gap_);
     return handed;
   }
 
@@ -235,7 +236,7 @@ class CoarseLevel {
   }
 
   int q_;
-  int neighbours_ = 0;
+  int neighbours_ = 0, gap_ = 0;
   NeighbourIndex index_;
   std::vector<std::uint64_t> keys_;  // Morton keys of the coarse points, ascending
   std::array<NeighbourIndex::Hit, kMaxNeighbours> hits_{};
@@ -328,9 +329,10 @@ std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
 // Which table each (depth, class, plane context) slot uses. Per class and
 // plane context, consecutive depths share a table when that costs fewer bits
 // than a table of their own. Slot (d, k, x) is (d * classes + k) * planes + x,
-// the order of the stream; planes is 1 (coder 0) or 2 (coder 2).
+// the order of the stream; planes is 1 (coder 0) or 2 (coder 2), either with
+// coder 3.
 struct TablePlan {
-  int classes = 1, planes = 1;
+  int classes = 1, planes = 1, gap = 0;  // gap > 0: coder 3
   std::vector<bool> fresh;                       // [slot]: a table is sent
   std::vector<int> table;                        // [slot]: the table used, -1 for none
   std::vector<std::vector<std::uint64_t>> freq;  // per table
@@ -339,14 +341,15 @@ struct TablePlan {
 
 // freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
 // nodes with w children holding coarse points and plane context x.
-TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes) {
+TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes, int gap) {
   TablePlan plan;
   plan.classes = classes;
   plan.planes = planes;
+  plan.gap = gap;
   const auto slots = static_cast<std::size_t>(q * classes * planes);
   plan.fresh.assign(slots, false);
   plan.table.assign(slots, -1);
-  plan.bits = 6 + slots;  // header fields, one flag per slot
+  plan.bits = (gap > 0 ? 11 : 6) + slots;  // header fields, one flag per slot
   std::vector<std::uint64_t> f(kAlphabet);
   for (int k = 0; k < classes; ++k)
     for (int x = 0; x < planes; ++x) {
@@ -398,6 +401,10 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
+  if (plan.gap > 0) {
+    w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
+    w.put(static_cast<std::uint32_t>(plan.gap), 4);
+  }
   for (std::size_t slot = 0; slot < plan.fresh.size(); ++slot) {
     w.put(plan.fresh[slot] ? 1u : 0u, 1);
     if (plan.fresh[slot]) codes[static_cast<std::size_t>(plan.table[slot])].write(w);
@@ -412,8 +419,12 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   return w.finish();
 }
 
+OctreeCoder coder_of(const RefinementParams& p) {
+  return p.gap > 0 ? OctreeCoder::gap : p.plane_contexts ? OctreeCoder::planes : OctreeCoder::plain;
+}
+
 RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::vector<GridPoint>& added_in, int q,
-                            const RefinementParams* forced, bool allow_planes) {
+                            const RefinementParams* forced, bool all_coders) {
   if (q < 1 || q > 21) fail(Status::invalid_argument, std::string(kWhat) + ": q must be 1..21");
   // The coarse level's canonical order breaks neighbour ties; accept any order here.
   std::vector<GridPoint> coarse = coarse_in;
@@ -423,9 +434,9 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   if (added_in.size() >= (std::size_t{1} << 32) - 1)
     fail(Status::invalid_argument, std::string(kWhat) + ": too many added points");
   if (forced && (forced->neighbours < 0 || forced->neighbours > kMaxNeighbours || forced->classes < 1 ||
-                 forced->classes > kMaxClasses))
+                 forced->classes > kMaxClasses || forced->gap < 0 || forced->gap > kMaxGap))
     fail(Status::invalid_argument, std::string(kWhat) + ": parameters out of range");
-  if (added_in.empty()) return {forced && forced->plane_contexts ? kPlaneCoder : kPlainCoder, {}};
+  if (added_in.empty()) return {static_cast<std::uint8_t>(forced ? coder_of(*forced) : OctreeCoder::plain), {}};
 
   std::vector<std::uint64_t> added(added_in.size());
   for (std::size_t i = 0; i < added.size(); ++i) added[i] = morton_key(added_in[i], q);
@@ -436,44 +447,69 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     if (std::binary_search(coarse.begin(), coarse.end(), morton_point(key, q)))
       fail(Status::invalid_argument, std::string(kWhat) + ": an added point is also a coarse point");
 
-  // The plane through 4 neighbours suits surfaces; the nearest point alone
-  // suits volume interiors. Try both and keep the smaller stream.
-  std::vector<int> choices{4, 1};
-  if (forced) choices = {forced->neighbours};
-  else if (coarse.size() == 1) choices = {1};
   // Coder 2 (plane contexts) doubles the tables; it is kept only when the
   // stream it gives is smaller.
   std::vector<int> plane_choices{1};
   if (forced) plane_choices = {forced->plane_contexts ? 2 : 1};
-  else if (allow_planes) plane_choices = {1, 2};
-  RefinementLayer best;
+  else if (all_coders) plane_choices = {1, 2};
   CoarseLevel level(coarse, q);
-  for (int neighbours : choices) {
+  // The smallest plan for one ranking (neighbours, gap): plan.bits is the
+  // layer's exact length, so plans compare in whole bytes, and only the best
+  // is written. On a tie the earlier one stays (fewer tables, gap 0).
+  struct Trial {
+    int neighbours = 0;
+    TablePlan plan;
+    std::vector<Symbol> symbols;
+  };
+  std::optional<Trial> best;
+  const auto bytes_of = [](const TablePlan& p) { return (p.bits + 7) / 8; };
+  const auto trial = [&](int neighbours, int gap) {
     level.set_neighbours(neighbours);
-    const Traversal traversal(level, added, q);
+    level.set_gap(gap);
+    Traversal traversal(level, added, q);
     std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 18 * kAlphabet, 0);
     for (const Symbol& s : traversal.symbols)
       ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
-    // plan.bits is the layer's exact length: the plans are compared in
-    // whole bytes (the smaller coder, coder 0 on a tie) and only the best
-    // one is written.
-    TablePlan plan;
-    bool planned = false;
-    for (int planes : plane_choices) {
-      TablePlan with_planes;
-      bool found = false;
+    std::optional<TablePlan> plan;
+    for (int planes : plane_choices)
       for (int classes = 1; classes <= kMaxClasses; ++classes) {
         if (forced && classes != forced->classes) continue;
-        TablePlan p = plan_tables(freq, q, classes, planes);
-        if (!found || p.bits < with_planes.bits) with_planes = std::move(p), found = true;
+        TablePlan p = plan_tables(freq, q, classes, planes, gap);
+        if (!plan || bytes_of(p) < bytes_of(*plan) || (bytes_of(p) == bytes_of(*plan) && planes == plan->planes &&
+                                                        p.bits < plan->bits))
+          plan = std::move(p);
       }
-      if (!planned || (with_planes.bits + 7) / 8 < (plan.bits + 7) / 8) plan = std::move(with_planes), planned = true;
+    const std::uint64_t bytes = bytes_of(*plan);
+    if (!best || bytes < bytes_of(best->plan)) best = Trial{neighbours, std::move(*plan), std::move(traversal.symbols)};
+    return bytes;
+  };
+  if (forced) {
+    trial(forced->neighbours, forced->gap);
+  } else {
+    // The plane through 4 neighbours suits surfaces; the nearest point alone
+    // suits volume interiors. With 4 neighbours (and all coders allowed),
+    // coder 3's gap weight is searched on a coarse grid, then beside its best.
+    const int neighbours = coarse.size() == 1 ? 1 : 4;
+    const bool gaps = all_coders && neighbours >= 2;
+    std::uint64_t least = trial(neighbours, 0);
+    int at = 0;
+    if (gaps)
+      for (int gap : {2, 4, 8})
+        if (const std::uint64_t b = trial(neighbours, gap); b < least) least = b, at = gap;
+    if (at > 0) {
+      const std::array<int, 2> beside = at == 2 ? std::array<int, 2>{1, 3}
+                                        : at == 4 ? std::array<int, 2>{3, 6}
+                                                  : std::array<int, 2>{6, 12};
+      for (int gap : beside) trial(neighbours, gap);
+    } else if (gaps) {
+      trial(neighbours, 1);
     }
-    std::vector<std::uint8_t> bytes = write_layer(traversal.symbols, plan, neighbours);
-    if (best.bytes.empty() || bytes.size() < best.bytes.size())
-      best = {plan.planes == 2 ? kPlaneCoder : kPlainCoder, std::move(bytes)};
+    if (neighbours != 1) trial(1, 0);
   }
-  return best;
+  const OctreeCoder coder = best->plan.gap > 0       ? OctreeCoder::gap
+                            : best->plan.planes == 2 ? OctreeCoder::planes
+                                                     : OctreeCoder::plain;
+  return {static_cast<std::uint8_t>(coder), write_layer(best->symbols, best->plan, best->neighbours)};
 }
 
 // ---------------------------------------------------------------- decoder
@@ -481,10 +517,15 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
 class Decoder {
  public:
   Decoder(BitReader& in, int q, const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form,
-          int planes)
-      : in_(in), q_(q), n_added_(n_added), planes_(planes) {
+          OctreeCoder coder)
+      : in_(in), q_(q), n_added_(n_added), planes_(coder == OctreeCoder::plain ? 1 : 2) {
     neighbours_ = static_cast<int>(in.get(4));
     classes_ = static_cast<int>(in.get(2)) + 1;
+    int gap = 0;
+    if (coder == OctreeCoder::gap) {
+      planes_ = static_cast<int>(in.get(1)) + 1;
+      gap = static_cast<int>(in.get(4));
+    }
     const int per_depth = classes_ * planes_;
     table_.assign(static_cast<std::size_t>(q * per_depth), -1);
     for (int d = 0; d < q; ++d)
@@ -500,6 +541,7 @@ class Decoder {
         }
     level_.emplace(coarse, q);
     level_->set_neighbours(neighbours_);
+    level_->set_gap(gap);
     visit(0, 0, 0, level_->size(), nullptr);
   }
 
@@ -573,14 +615,14 @@ RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, co
 
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
                                          const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form,
-                                         bool plane_contexts) {
+                                         OctreeCoder coder) {
   check_coarse(coarse, q);
   if (n_added == 0) {
     if (size != 0) fail(Status::bad_layer, std::string(kWhat) + ": payload present for zero added points");
     return {};
   }
   BitReader in(data, size, kWhat);
-  const Decoder decoder(in, q, coarse, n_added, form, plane_contexts ? 2 : 1);
+  const Decoder decoder(in, q, coarse, n_added, form, coder);
   in.expect_end();
   if (decoder.keys.size() != n_added)
     fail(Status::bad_layer, std::string(kWhat) + ": " + std::to_string(decoder.keys.size()) + " points, " +

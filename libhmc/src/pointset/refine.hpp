@@ -15,19 +15,28 @@
 
 namespace hmc::detail {
 
-/// The two header fields of a refinement layer: the number of coarse
-/// neighbours that predict where added points lie (0 to 15; 0 disables the
-/// prediction), and the number of context classes (1 to 4).
+/// The exact REFN coders (spec 8A): the conditional octree (0), with plane
+/// contexts (2), and with plane contexts and gap ranking (3).
+enum class OctreeCoder : std::uint8_t { plain = 0, planes = 2, gap = 3 };
+
+/// The header fields of a refinement layer: the number of coarse neighbours
+/// that predict where added points lie (0 to 15; 0 disables the prediction),
+/// the number of context classes (1 to 4), the plane contexts and the gap
+/// weight. The coder follows from them: 3 when gap > 0, else 2 with plane
+/// contexts, else 0.
 struct RefinementParams {
   int neighbours = 4;
   int classes = 4;
-  /// Coder 2 (spec 8A.3): tables also chosen by whether the plane fitted to
-  /// the neighbours crosses the node.
+  /// Coders 2 and 3 (spec 8A.3, 8A.4): tables also chosen by whether the
+  /// plane fitted to the neighbours crosses the node.
   bool plane_contexts = false;
+  /// Coder 3 (spec 8A.4), 0 to 15: how much a child's distance from the
+  /// nearest neighbour moves it up the ranking (0: not at all, coders 0, 2).
+  int gap = 0;
 };
 
 /// A refinement layer as the encoder writes it: the REFN coder number (0,
-/// the conditional octree, or 2, the same with plane contexts) and its bits.
+/// 2 or 3, an OctreeCoder) and its bits.
 struct RefinementLayer {
   std::uint8_t coder = 0;
   std::vector<std::uint8_t> bytes;
@@ -42,11 +51,11 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
                                             int q);
 
 /// The same with the header fields fixed by the caller (tests, measurements);
-/// `params.plane_contexts` selects the bits of coder 2.
+/// they select the coder (see RefinementParams).
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params);
 
-/// What the encoder writes: coder 0 or coder 2, whichever is smaller.
+/// What the encoder writes: coder 0, 2 or 3, whichever is smallest.
 RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                         int q);
 
@@ -54,9 +63,9 @@ RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, co
 /// bad_layer or bad_huffman_table on malformed data, never reads out of
 /// bounds; memory is bounded by coarse.size() + n_added and work by q times
 /// that, whatever `n_added` claims. `coarse` must be canonical and non-empty
-/// (invalid_argument otherwise). `plane_contexts`: the bits of coder 2.
+/// (invalid_argument otherwise). `coder`: which coder's bits these are.
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
                                          const std::vector<GridPoint>& coarse, std::uint64_t n_added,
-                                         TableForm form = TableForm::deltas, bool plane_contexts = false);
+                                         TableForm form = TableForm::deltas, OctreeCoder coder = OctreeCoder::plain);
 
 }  // namespace hmc::detail
