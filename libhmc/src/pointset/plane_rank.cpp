@@ -46,8 +46,7 @@ void reduce(std::array<std::int64_t, N>& v, int bits) {
 
 }  // namespace
 
-void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
-                   std::array<int, 8>& order, int* split, int gap) {
+ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, bool with_gaps) {
   const std::int64_t h = std::int64_t{1} << (q - d);  // node side
   std::array<std::int64_t, 3> s{0, 0, 0};
   std::array<std::int64_t, 6> ss{};  // xx yy zz xy xz yz
@@ -74,7 +73,6 @@ void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, 
                                            : std::array<std::int64_t, 3>{axz, ayz, diag[2]};
   reduce(n, 20);
 
-  std::array<std::int64_t, 8> t{}, e{};
   int above = 0, below = 0;
   for (std::size_t c = 0; c < 8; ++c) {
     std::int64_t dot = 0, len = 0;
@@ -84,45 +82,57 @@ void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, 
       dot += n[a] * v;
       len += v * v;
     }
-    t[c] = dot < 0 ? -dot : dot;
-    e[c] = len;
+    t_[c] = dot < 0 ? -dot : dot;
+    e_[c] = len;
     above += dot > 0;
     below += dot < 0;
   }
-  if (split) *split = std::min(above, below);
+  split_ = std::min(above, below);
   // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
   // the squared distance from the child's centre to its nearest neighbour.
   // t_c / (k |n|) is the child's distance to the plane, so both terms are
   // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^101.
-  std::array<Int128, 8> kappa{};
   const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  const bool gapped = gap > 0 && n2 > 0;
-  if (gapped) {
-    const Int128 weight = static_cast<Int128>(gap) * (k * k) * n2;
-    for (std::size_t c = 0; c < 8; ++c) {
-      std::int64_t g = INT64_MAX;
-      for (int i = 0; i < k; ++i) {
-        std::int64_t d2 = 0;
-        for (std::size_t a = 0; a < 3; ++a) {
-          const std::int64_t bit = (c >> (2 - a)) & 1;
-          const std::int64_t u = (2 * std::int64_t{p[a]} + bit) * h + h / 2 - neighbours[i][a];
-          d2 += u * u;
-        }
-        g = std::min(g, d2);
+  if (!with_gaps || n2 == 0) return;
+  weight_ = std::int64_t{k} * k * n2;
+  for (std::size_t c = 0; c < 8; ++c) {
+    std::int64_t g = INT64_MAX;
+    for (int i = 0; i < k; ++i) {
+      std::int64_t d2 = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        const std::int64_t bit = (c >> (2 - a)) & 1;
+        const std::int64_t u = (2 * std::int64_t{p[a]} + bit) * h + h / 2 - neighbours[i][a];
+        d2 += u * u;
       }
-      kappa[c] = 32 * static_cast<Int128>(t[c]) * t[c] - weight * g;
+      g = std::min(g, d2);
     }
+    g_[c] = g;
   }
+}
+
+void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) const {
+  std::array<Int128, 8> kappa{};
+  const bool gapped = gap > 0 && weight_ > 0;
+  if (gapped)
+    for (std::size_t c = 0; c < 8; ++c)
+      kappa[c] = 32 * static_cast<Int128>(t_[c]) * t_[c] - static_cast<Int128>(gap) * weight_ * g_[c];
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](int a, int b) {
     const unsigned ca = (first_mask >> a) & 1u, cb = (first_mask >> b) & 1u;
     if (ca != cb) return ca > cb;
     const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
     if (gapped && kappa[ua] != kappa[ub]) return kappa[ua] < kappa[ub];
-    if (t[ua] != t[ub]) return t[ua] < t[ub];
-    if (e[ua] != e[ub]) return e[ua] < e[ub];
+    if (t_[ua] != t_[ub]) return t_[ua] < t_[ub];
+    if (e_[ua] != e_[ub]) return e_[ua] < e_[ub];
     return a < b;
   });
+}
+
+void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
+                   std::array<int, 8>& order, int* split, int gap) {
+  const ChildKeys keys(p, d, q, neighbours, k, gap > 0);
+  keys.order(first_mask, gap, order);
+  if (split) *split = keys.split();
 }
 
 }  // namespace hmc::detail

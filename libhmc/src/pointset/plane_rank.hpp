@@ -27,6 +27,24 @@ int popcount8(unsigned v);
 /// Point in doubled grid coordinates (below 2^22).
 using Doubled = std::array<std::int32_t, 3>;
 
+/// The keys that rank a node's children (spec 8A.1 steps 2–4, and 8A.4's
+/// distances to the nearest neighbour when `with_gaps`), computed once so
+/// that the encoder can rank the children for several gap weights.
+class ChildKeys {
+ public:
+  ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps);
+  /// How many children lie on the smaller side of the fitted plane (0 to 4).
+  int split() const { return split_; }
+  /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;
+  /// above 0 only when constructed `with_gaps`).
+  void order(unsigned first_mask, int gap, std::array<int, 8>& order) const;
+
+ private:
+  std::array<std::int64_t, 8> t_{}, e_{}, g_{};
+  std::int64_t weight_ = 0;  // k^2 |n|^2, or 0: no gap term
+  int split_ = 0;
+};
+
 /// order[r] = the child of rank r of the node `node` (integer coordinates at
 /// depth d < q on a 2^q grid): children whose bit is set in `first_mask`
 /// first, then by distance of the child's centre to the plane fitted to the

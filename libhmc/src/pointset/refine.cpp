@@ -165,8 +165,11 @@ class CoarseLevel {
   std::uint32_t size() const { return static_cast<std::uint32_t>(keys_.size()); }
   /// K, the number of neighbours that predict a node's children.
   void set_neighbours(int k) { neighbours_ = k; }
-  /// G, the gap weight of coder 3's ranking (0: the plain ranking).
-  void set_gap(int g) { gap_ = g; }
+  /// G, the gap weight of coder 3's ranking (0: the plain ranking);
+  /// `others`: last_keys() must also rank for other weights.
+  void set_gap(int g, bool others = false) { gap_ = g, with_gaps_ = g > 0 || others; }
+  /// The keys of the node ranked last.
+  const ChildKeys& last_keys() const { return last_; }
 
   /// Boundaries of the coarse points of the eight children of a node at
   /// depth d holding keys_[c0, c1): child c holds keys_[b[c], b[c + 1]).
@@ -196,7 +199,9 @@ class CoarseLevel {
     const Candidates* handed = neighbours(centre, inherited, fresh, k);
     std::array<Point32, kMaxNeighbours> nb{};
     for (int i = 0; i < k; ++i) nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
-    rank_children(p, d, q_, nb.data(), k, coarse_mask, order, split, gap_);
+    last_ = ChildKeys(p, d, q_, nb.data(), k, with_gaps_);
+    last_.order(coarse_mask, gap_, order);
+    if (split) *split = last_.split();
     return handed;
   }
 
@@ -237,6 +242,8 @@ class CoarseLevel {
 
   int q_;
   int neighbours_ = 0, gap_ = 0;
+  bool with_gaps_ = false;
+  ChildKeys last_{{0, 0, 0}, 0, 1, nullptr, 0, false};
   NeighbourIndex index_;
   std::vector<std::uint64_t> keys_;  // Morton keys of the coarse points, ascending
   std::array<NeighbourIndex::Hit, kMaxNeighbours> hits_{};
@@ -277,12 +284,19 @@ struct Symbol {
 // side of the plane.
 std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 
+// The symbols of the coarse level's ranking. With `gaps`, it also counts,
+// per gap weight gaps[j], the symbols that ranking would give:
+// counts[j][((d * 9 + w) * 2 + x) * kAlphabet + s], as encode_impl's freq
+// (the coarse level must have been set to rank for other weights).
 class Traversal {
  public:
-  Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q) : coarse_(coarse), added_(added), q_(q) {
+  Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q, const std::vector<int>& gaps = {})
+      : coarse_(coarse), added_(added), q_(q), gaps_(gaps) {
+    counts.assign(gaps.size(), std::vector<std::uint64_t>(static_cast<std::size_t>(q) * 18 * kAlphabet, 0));
     visit(0, 0, 0, coarse.size(), 0, static_cast<std::uint32_t>(added.size()), nullptr);
   }
   std::vector<Symbol> symbols;
+  std::vector<std::vector<std::uint64_t>> counts;
 
  private:
   void visit(int d, std::uint64_t key, std::uint32_t c0, std::uint32_t c1, std::uint32_t a0, std::uint32_t a1,
@@ -304,10 +318,20 @@ class Traversal {
     std::array<int, 8> order{};
     int split = 0;
     const CoarseLevel::Candidates* handed = coarse_.rank(d, key, mask, inherited, fresh, order, &split);
-    unsigned ranked = 0;
-    for (std::size_t r = 0; r < 8; ++r) ranked |= ((occ >> order[r]) & 1u) << r;
-    symbols.push_back({static_cast<std::uint8_t>(d), static_cast<std::uint8_t>(popcount8(mask)),
-                       occupancy_order().index[ranked], plane_context(split)});
+    const auto ranked_symbol = [occ](const std::array<int, 8>& o) {
+      unsigned ranked = 0;
+      for (std::size_t r = 0; r < 8; ++r) ranked |= ((occ >> o[r]) & 1u) << r;
+      return occupancy_order().index[ranked];
+    };
+    const Symbol symbol{static_cast<std::uint8_t>(d), static_cast<std::uint8_t>(popcount8(mask)), ranked_symbol(order),
+                        plane_context(split)};
+    symbols.push_back(symbol);
+    const std::size_t row = (static_cast<std::size_t>(d) * 9 + symbol.weight) * 2 + symbol.plane;
+    for (std::size_t j = 0; j < gaps_.size(); ++j) {
+      std::array<int, 8> other{};
+      coarse_.last_keys().order(mask, gaps_[j], other);
+      ++counts[j][row * kAlphabet + ranked_symbol(other)];
+    }
     if (d + 1 == q_) return;
     for (std::size_t c = 0; c < 8; ++c)
       if (occ & (1u << c)) visit(d + 1, (key << 3) | c, cb[c], cb[c + 1], ab[c], ab[c + 1], handed);
@@ -316,6 +340,7 @@ class Traversal {
   CoarseLevel& coarse_;
   const std::vector<std::uint64_t>& added_;
   int q_;
+  std::vector<int> gaps_;
 };
 
 // Bits of a code-length table plus the symbols it codes.
@@ -456,20 +481,8 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   // The smallest plan for one ranking (neighbours, gap): plan.bits is the
   // layer's exact length, so plans compare in whole bytes, and only the best
   // is written. On a tie the earlier one stays (fewer tables, gap 0).
-  struct Trial {
-    int neighbours = 0;
-    TablePlan plan;
-    std::vector<Symbol> symbols;
-  };
-  std::optional<Trial> best;
   const auto bytes_of = [](const TablePlan& p) { return (p.bits + 7) / 8; };
-  const auto trial = [&](int neighbours, int gap) {
-    level.set_neighbours(neighbours);
-    level.set_gap(gap);
-    Traversal traversal(level, added, q);
-    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 18 * kAlphabet, 0);
-    for (const Symbol& s : traversal.symbols)
-      ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
+  const auto plan_of = [&](const std::vector<std::uint64_t>& freq, int gap) {
     std::optional<TablePlan> plan;
     for (int planes : plane_choices)
       for (int classes = 1; classes <= kMaxClasses; ++classes) {
@@ -479,32 +492,47 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
                                                         p.bits < plan->bits))
           plan = std::move(p);
       }
-    const std::uint64_t bytes = bytes_of(*plan);
-    if (!best || bytes < bytes_of(best->plan)) best = Trial{neighbours, std::move(*plan), std::move(traversal.symbols)};
-    return bytes;
+    return std::move(*plan);
+  };
+  struct Trial {
+    int neighbours = 0;
+    TablePlan plan;
+    std::vector<Symbol> symbols;
+  };
+  std::optional<Trial> best;
+  // One traversal per neighbour count: it gives the symbols for `gap` and
+  // counts those of every weight in `others`, whose plans are compared
+  // without symbols; a better weight is then traversed again for its symbols.
+  const auto trial = [&](int neighbours, int gap, const std::vector<int>& others) {
+    level.set_neighbours(neighbours);
+    level.set_gap(gap, !others.empty());
+    Traversal traversal(level, added, q, others);
+    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 18 * kAlphabet, 0);
+    for (const Symbol& s : traversal.symbols)
+      ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
+    TablePlan plan = plan_of(freq, gap);
+    int better = 0;
+    for (std::size_t j = 0; j < others.size(); ++j) {
+      TablePlan p = plan_of(traversal.counts[j], others[j]);
+      if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = others[j];
+    }
+    if (!best || bytes_of(plan) < bytes_of(best->plan)) {
+      if (better > 0) {
+        level.set_gap(better);
+        traversal.symbols = Traversal(level, added, q).symbols;
+      }
+      best = Trial{neighbours, std::move(plan), std::move(traversal.symbols)};
+    }
   };
   if (forced) {
-    trial(forced->neighbours, forced->gap);
+    trial(forced->neighbours, forced->gap, {});
   } else {
     // The plane through 4 neighbours suits surfaces; the nearest point alone
     // suits volume interiors. With 4 neighbours (and all coders allowed),
-    // coder 3's gap weight is searched on a coarse grid, then beside its best.
+    // coder 3's gap weights 1 to 12 are tried too.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
-    const bool gaps = all_coders && neighbours >= 2;
-    std::uint64_t least = trial(neighbours, 0);
-    int at = 0;
-    if (gaps)
-      for (int gap : {2, 4, 8})
-        if (const std::uint64_t b = trial(neighbours, gap); b < least) least = b, at = gap;
-    if (at > 0) {
-      const std::array<int, 2> beside = at == 2 ? std::array<int, 2>{1, 3}
-                                        : at == 4 ? std::array<int, 2>{3, 6}
-                                                  : std::array<int, 2>{6, 12};
-      for (int gap : beside) trial(neighbours, gap);
-    } else if (gaps) {
-      trial(neighbours, 1);
-    }
-    if (neighbours != 1) trial(1, 0);
+    trial(neighbours, 0, all_coders && neighbours >= 2 ? std::vector<int>{1, 2, 3, 4, 6, 8, 12} : std::vector<int>{});
+    if (neighbours != 1) trial(1, 0, {});
   }
   const OctreeCoder coder = best->plan.gap > 0       ? OctreeCoder::gap
                             : best->plan.planes == 2 ? OctreeCoder::planes
