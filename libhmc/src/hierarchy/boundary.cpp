@@ -63,7 +63,11 @@ BoundaryAnalysis analyze_boundary(const LevelMesh& m, Kind kind, const Classific
     for (const std::uint32_t* u = g.begin(v); u != g.end(v); ++u)
       r.local_length[v] = std::max(r.local_length[v], length(sub(p[*u], p[v])));
 
-  const auto faces = hierarchy::boundary_faces(m, kind);
+  // classify() found the faces of a volume already (sorting every face of
+  // every tetrahedron); a surface's are its triangles.
+  std::vector<std::array<std::uint32_t, 3>> own;
+  if (kind != Kind::volume) own = hierarchy::boundary_faces(m, kind);
+  const auto& faces = kind == Kind::volume ? c.faces : own;
   r.boundary_faces = faces.size();
   std::vector<IVec3> normal(faces.size());
   std::vector<double> normal_len(faces.size());

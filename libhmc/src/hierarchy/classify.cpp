@@ -83,7 +83,7 @@ Classification classify(const LevelMesh& m, Kind kind) {
       c.solid_angle[t[i]] += 2.0 * std::atan2(six_v, den);
     }
   }
-  hierarchy::boundary_faces(m, kind, &c.boundary);
+  c.faces = hierarchy::boundary_faces(m, kind, &c.boundary);
   c.boundary_by_angle.assign(n, 0);
   for (std::size_t v = 0; v < n; ++v) {
     if (!in_tet[v]) c.boundary[v] = 1;

@@ -152,6 +152,10 @@ struct Classification {
   std::size_t disagreements = 0;
   std::vector<double> solid_angle;  ///< volume kind: the sum per vertex (sr); empty otherwise
   std::size_t boundary_count = 0;   ///< number of 1s in `boundary`
+  /// Volume kind: the boundary faces (those of one tetrahedron only, as
+  /// hierarchy::boundary_faces gives them), kept for analyze_boundary so
+  /// that the faces are sorted once per level; empty otherwise.
+  std::vector<std::array<std::uint32_t, 3>> faces;
 };
 
 Classification classify(const LevelMesh& m, Kind kind);
