@@ -22,6 +22,7 @@
 #include <iostream>
 #include <map>
 #include <numeric>
+#include <random>
 #include <set>
 #include <sstream>
 #include <string>
@@ -31,6 +32,7 @@
 #include "hierarchy/hierarchy.hpp"
 #include "hmc/codec.hpp"
 #include "samples.hpp"
+#include "util/single_faces.hpp"
 
 // hmc::BoundaryMode (public API) and hmc::detail::BoundaryMode share a name:
 // only the detail namespace is imported wholesale.
@@ -1019,4 +1021,50 @@ TEST_CASE("decimation is deterministic") {
       CHECK(s1.dmax0 == s2.dmax0);
     }
   }
+}
+
+TEST_CASE("single_faces: the faces whose vertex set occurs once, in ascending order of the sorted triple") {
+  // Random faces over few vertices, so that vertex sets repeat (twice, as
+  // between two tetrahedra, and more often), in random orientations; and
+  // the faces of a Delaunay tetrahedralization, whose single faces are the hull.
+  std::mt19937_64 rng(41);
+  for (int trial = 0; trial < 50; ++trial) {
+    const std::uint32_t n = 4 + static_cast<std::uint32_t>(rng() % 12);
+    std::vector<std::array<std::uint32_t, 3>> faces(rng() % 200);
+    for (auto& f : faces) {
+      do {
+        for (auto& v : f) v = static_cast<std::uint32_t>(rng() % n);
+      } while (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]);
+    }
+    // The plain definition: count the sorted triples, keep the single ones
+    // with the face as given, ordered by the sorted triple.
+    std::map<std::array<std::uint32_t, 3>, std::vector<std::size_t>> uses;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      auto key = faces[i];
+      std::sort(key.begin(), key.end());
+      uses[key].push_back(i);
+    }
+    std::vector<std::array<std::uint32_t, 3>> want;
+    for (const auto& [key, at] : uses)
+      if (at.size() == 1) want.push_back(faces[at[0]]);
+    CAPTURE(trial);
+    CHECK(single_faces(faces) == want);
+  }
+  CHECK(single_faces({}).empty());
+  const Mesh ball = samples::random_ball(300, 43);
+  std::vector<GridPoint> pts;
+  for (const auto& p : ball.points)
+    pts.push_back({static_cast<std::uint32_t>(512 + 400 * p[0]), static_cast<std::uint32_t>(512 + 400 * p[1]),
+                   static_cast<std::uint32_t>(512 + 400 * p[2])});
+  std::sort(pts.begin(), pts.end());
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  const Tetrahedralization dt = delaunay(pts);
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  std::size_t hull = 0;
+  for (std::size_t t = 0; t < dt.tets.size(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      faces.push_back({dt.tets[t][(k + 1) & 3], dt.tets[t][(k + 2) & 3], dt.tets[t][(k + 3) & 3]});
+      hull += dt.neighbors[t][static_cast<std::size_t>(k)] == kNoTet;
+    }
+  CHECK(single_faces(faces).size() == hull);
 }
