@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x0c"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x0d"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -384,7 +384,8 @@ def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1):
 def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None):
     """§8A.1 conditional octree coder (planes = 2: coder 2, §8A.3, with the
     plane context; gap not None: coder 3, §8A.4, with that weight and planes
-    1 or 2), written from the decoder's ranking (refdec.child_order).
+    1 or 2, or, a list of q weights, coder 4, §8A.5), written from the
+    decoder's ranking (refdec.child_order).
     coarse: C in canonical order; added: A."""
     coarse = sorted(coarse)
     occ = [set() for _ in range(q + 1)]
@@ -404,7 +405,8 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
         kids = [(2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1)) for c in range(8)]
         m = sum(1 << c for c in range(8) if kids[c] in occ[d + 1])
         j = min(bin(m).count("1"), classes - 1)
-        pi, split = refdec.child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=gap or 0)
+        g = gap[d] if isinstance(gap, list) else gap or 0
+        pi, split = refdec.child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=g)
         x = 1 if planes == 2 and split >= 2 else 0
         rho = sum(1 << r for r in range(8) if kids[pi[r]] in aocc[d + 1])
         seq.append((d, (j, x), refdec.E.index(rho)))
@@ -419,7 +421,8 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     bw.put(classes - 1, 2)
     if gap is not None:
         bw.put(planes - 1, 1)
-        bw.put(gap, 4)
+        for g in (gap if isinstance(gap, list) else [gap]):
+            bw.put(g, 4)
     coder = {}
     for j in slots:
         prev = None
@@ -451,7 +454,8 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
                 current[(d, j)] = current[(d - 1, j)]
     for (d, j, s) in seq:
         current[(d, j)].put(bw, s)
-    return bytes([3 if gap is not None else 2 if planes == 2 else 0]) + bw.bytes()
+    coder = 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
+    return bytes([coder]) + bw.bytes()
 
 
 def zigzag(v):
@@ -1154,6 +1158,17 @@ def hb_refn_gap():
     return hand_stream(0, 10, lv, [(4, 4, True, 2, 6), (4, 2, False, 1, 15), (1, 3, True, 2, 9), (15, 1, True, 1, 1)])
 
 
+def hb_refn_depth_gaps():
+    # REFN coder 4 (a gap weight per depth): neighbours 4, weights 0 to 15
+    # over the depths with plane contexts and 3 classes; then the same weight
+    # at every depth (coder 4 saying what coder 3 would) without plane
+    # contexts; then neighbours 1 (no plane: the weights change nothing).
+    pts = sphere_pts(450, 10, 91)
+    lv = nested(pts, [90, 250, 380, 450], 92)
+    return hand_stream(0, 10, lv, [(4, 3, True, 2, [0, 15, 1, 7, 3, 12, 2, 9, 4, 1]), (4, 2, True, 1, [5] * 10),
+                                   (1, 1, True, 2, [8, 0, 8, 0, 8, 0, 8, 0, 8, 0])])
+
+
 def hb_base_ranked_sphere():
     return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8, classes=4)
 
@@ -1318,6 +1333,8 @@ HANDBUILT = [
      "REFN coder 2 with three classes, its tables in the delta form", sec("head", "refn", "huff")),
     ("refn-gap", hb_refn_gap, P,
      "REFN coder 3 (gap ranking): neighbours 4 with G = 6, plane contexts, 4 classes; G = 15 without plane contexts, 2 classes, unshared tables; neighbours 1 with G = 9 (no plane, the order of 8A.1); neighbours 15 with G = 1", sec("refn", "huff")),
+    ("refn-depth-gaps", hb_refn_depth_gaps, P,
+     "REFN coder 4 (a gap weight per depth): neighbours 4 with weights 0-15 varying by depth, plane contexts, 3 classes; the same weight 5 at every depth without plane contexts; neighbours 1 with alternating weights (no plane: the order of 8A.1)", sec("refn", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
      "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
@@ -1566,8 +1583,10 @@ NEGATIVE = [
      lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
     ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
-    ("neg-refn-coder", "bad_layer", P, "REFN coder 4", ["8A", "13"],
-     lambda: stream_q1_refn(b"\x04" + refn_single(0)[1:])),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 5", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x05" + refn_single(0)[1:])),
+    ("neg-refn-depth-gaps-cut", "bad_layer", P, "REFN coder 4 at q = 1 whose payload ends inside the weight of depth 0 (one data byte: neighbours, classes, planes and one bit of G_0)", ["8A.5", "13"],
+     lambda: stream_q1_refn(b"\x04" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1))))),
     ("neg-refn-gap-header-cut", "bad_layer", P, "REFN coder 3 whose payload ends inside the gap field (one data byte: neighbours, classes, planes and one bit of G)", ["8A.4", "13"],
      lambda: stream_q1_refn(b"\x03" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 1))))),
     ("neg-vq-no-vqtb", "bad_layer", P, "a REFN of coder 1 in a stream without VQTB", ["8A.2", "13"],

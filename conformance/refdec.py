@@ -448,16 +448,16 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
         return decode_vq(payload, q, coarse, n, codebook, form)
-    if payload[0] not in (0, 2, 3):
+    if payload[0] not in (0, 2, 3, 4):
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     planes = 2 if payload[0] == 2 else 1  # §8A.3: coder 2 adds the plane context
     br = BitReader(payload, 1, "bad_layer", "REFN")
     neighbours = br.bits(4)
     classes = br.bits(2) + 1
-    gap = 0
-    if payload[0] == 3:  # §8A.4: the plane contexts and the gap weight
+    gaps = [0] * q
+    if payload[0] in (3, 4):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
         planes = br.bits(1) + 1
-        gap = br.bits(4)
+        gaps = [br.bits(4)] * q if payload[0] == 3 else [br.bits(4) for _ in range(q)]
     table = [[[None] * planes for _ in range(classes)] for _ in range(q)]
     for d in range(q):
         for j in range(classes):
@@ -483,7 +483,7 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
             if kids[c] in occ[d + 1]:
                 m |= 1 << c
         w = bin(m).count("1")
-        pi, split = child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=gap)
+        pi, split = child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=gaps[d])
         x = 1 if planes == 2 and split >= 2 else 0
         T = table[d][min(w, classes - 1)][x]
         if T is None:

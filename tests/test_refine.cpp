@@ -54,6 +54,15 @@ Points sorted(Points p) {
   return p;
 }
 
+// Refinement parameters with the given neighbours and classes, the rest
+// default (no plane contexts, no gap weights).
+RefinementParams params(int neighbours, int classes) {
+  RefinementParams p;
+  p.neighbours = neighbours;
+  p.classes = classes;
+  return p;
+}
+
 struct Split {
   Points coarse, added;
 };
@@ -300,7 +309,7 @@ TEST_CASE("refinement round trips with every header choice") {
     for (int classes = 1; classes <= 4; ++classes) {
       CAPTURE(k);
       CAPTURE(classes);
-      const RefinementParams p{k, classes};
+      const RefinementParams p = params(k, classes);
       const auto bytes = round_trip(s.coarse, s.added, q, &p);
       CHECK((bytes[0] >> 4) == k);
       CHECK(((bytes[0] >> 2) & 3) + 1 == classes);
@@ -352,7 +361,7 @@ TEST_CASE("refinement at q = 2 and q = 21") {
     round_trip(s.coarse, s.added, 21);
     const Split corners = split_by(pts, [](std::size_t i) { return i % 3 == 0; });
     round_trip(corners.coarse, corners.added, 21);
-    const RefinementParams p{15, 4};
+    const RefinementParams p = params(15, 4);
     round_trip(s.coarse, s.added, 21, &p);
   }
   SUBCASE("q = 21, a dense surface") {
@@ -396,9 +405,9 @@ TEST_CASE("refinement: an empty layer and invalid arguments") {
   CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 16}}, 4); }) == Status::invalid_argument);
   CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 0); }) == Status::invalid_argument);
   CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 22); }) == Status::invalid_argument);
-  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 4, RefinementParams{16, 1}); }) ==
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 4, params(16, 1)); }) ==
         Status::invalid_argument);
-  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 4, RefinementParams{4, 5}); }) ==
+  CHECK(status_of([&] { encode_refinement(coarse, {{0, 0, 1}}, 4, params(4, 5)); }) ==
         Status::invalid_argument);
   const std::uint8_t some[2] = {0x40, 0};
   CHECK(status_of([&] { decode_refinement(some, 2, 4, {}, 1); }) == Status::invalid_argument);
@@ -577,7 +586,7 @@ TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the small
     for (int classes = 1; classes <= 4; ++classes) {
       CAPTURE(k);
       CAPTURE(classes);
-      RefinementParams p{k, classes};
+      RefinementParams p = params(k, classes);
       p.plane_contexts = true;
       const auto bytes = encode_refinement(s.coarse, s.added, q, p);
       CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
@@ -589,7 +598,7 @@ TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the small
       CHECK((st == Status::bad_layer || st == Status::bad_huffman_table || (st == Status::ok && as_plain != sorted(s.added))));
     }
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  REQUIRE((layer.coder == 0 || layer.coder == 2 || layer.coder == 3));
+  REQUIRE((layer.coder == 0 || layer.coder == 2 || layer.coder == 3 || layer.coder == 4));
   const auto plain = encode_refinement(s.coarse, s.added, q);
   CHECK(layer.bytes.size() <= plain.size());
   if (layer.coder == 0) CHECK(layer.bytes == plain);
@@ -667,7 +676,7 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
         CAPTURE(k);
         CAPTURE(gap);
         CAPTURE(planes);
-        RefinementParams p{k, 2};
+        RefinementParams p = params(k, 2);
         p.plane_contexts = planes;
         p.gap = gap;
         const auto bytes = encode_refinement(s.coarse, s.added, q, p);
@@ -682,14 +691,14 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
         CHECK((st == Status::bad_layer || st == Status::bad_huffman_table ||
                (st == Status::ok && as_planes != sorted(s.added))));
       }
-  // The encoder's choice: coder 3, at least 2 % smaller than the best
+  // The encoder's choice: coder 3 or 4, at least 2 % smaller than the best
   // ranking without the gap term (coders 0 and 2, 4 neighbours).
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  CHECK(layer.coder == 3);
+  CHECK((layer.coder == 3 || layer.coder == 4));
   std::size_t without = SIZE_MAX;
   for (bool planes : {false, true})
     for (int classes = 1; classes <= 4; ++classes) {
-      RefinementParams p{4, classes};
+      RefinementParams p = params(4, classes);
       p.plane_contexts = planes;
       without = std::min(without, encode_refinement(s.coarse, s.added, q, p).size());
     }
@@ -698,7 +707,43 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
   MESSAGE("gap ranking: ", layer.bytes.size(), " bytes, without: ", without, " (", s.added.size(), " added points)");
   CHECK(50 * layer.bytes.size() <= 49 * without);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                          OctreeCoder::gap) == sorted(s.added));
+                          static_cast<OctreeCoder>(layer.coder)) == sorted(s.added));
+
+  // Coder 4: a weight per depth. Equal weights rank as coder 3 does; other
+  // weights give other symbols; every choice decodes.
+  const auto depth_coded = [&](const std::vector<int>& gaps, bool planes) {
+    RefinementParams p = params(4, 3);
+    p.plane_contexts = planes;
+    p.depth_gaps = gaps;
+    return encode_refinement(s.coarse, s.added, q, p);
+  };
+  const std::vector<std::vector<int>> choices{
+      {0, 0, 0, 0, 0, 0, 2, 6, 8, 4, 2, 1}, {15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4}, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1}};
+  std::set<std::vector<std::uint8_t>> distinct;
+  for (const auto& gaps : choices)
+    for (bool planes : {false, true}) {
+      CAPTURE(planes);
+      const auto bytes = depth_coded(gaps, planes);
+      distinct.insert(bytes);
+      CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                              OctreeCoder::depth_gaps) == sorted(s.added));
+      // Read as coder 3, the weights of depths 1 on become slot flags.
+      Points as_gap;
+      const Status st = status_of([&] {
+        as_gap = decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                                   OctreeCoder::gap);
+      });
+      CHECK((st == Status::bad_layer || st == Status::bad_huffman_table ||
+             (st == Status::ok && as_gap != sorted(s.added))));
+    }
+  CHECK(distinct.size() == 2 * choices.size());
+  // The same weight at every depth is coder 3 (RefinementParams): the same
+  // bytes as its single weight.
+  RefinementParams three = params(4, 3);
+  three.gap = 6;
+  RefinementParams four = params(4, 3);
+  four.depth_gaps.assign(q, 6);
+  CHECK(encode_refinement(s.coarse, s.added, q, four) == encode_refinement(s.coarse, s.added, q, three));
 }
 
 TEST_CASE("the ranked base coder's lattice neighbour search equals a k-d tree's, ties included") {

@@ -17,6 +17,7 @@ const char* refinement_coder_name(int coder) {
     case 1: return "anchored VQ (lossy)";
     case 2: return "conditional octree, plane contexts";
     case 3: return "conditional octree, gap ranking";
+    case 4: return "conditional octree, gap ranking per depth";
     default: return "unknown";
   }
 }

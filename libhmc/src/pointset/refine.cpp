@@ -165,9 +165,12 @@ class CoarseLevel {
   std::uint32_t size() const { return static_cast<std::uint32_t>(keys_.size()); }
   /// K, the number of neighbours that predict a node's children.
   void set_neighbours(int k) { neighbours_ = k; }
-  /// G, the gap weight of coder 3's ranking (0: the plain ranking);
-  /// `others`: last_keys() must also rank for other weights.
-  void set_gap(int g, bool others = false) { gap_ = g, with_gaps_ = g > 0 || others; }
+  /// The gap weight of each depth's ranking (coders 3 and 4; 0: the plain
+  /// ranking); `others`: last_keys() must also rank for other weights.
+  void set_gaps(const std::vector<int>& gaps, bool others = false) {
+    gaps_ = gaps;
+    with_gaps_ = others || std::any_of(gaps.begin(), gaps.end(), [](int g) { return g > 0; });
+  }
   /// The keys of the node ranked last.
   const ChildKeys& last_keys() const { return last_; }
 
@@ -200,7 +203,7 @@ class CoarseLevel {
     std::array<Point32, kMaxNeighbours> nb{};
     for (int i = 0; i < k; ++i) nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
     last_ = ChildKeys(p, d, q_, nb.data(), k, with_gaps_);
-    last_.order(coarse_mask, gap_, order);
+    last_.order(coarse_mask, gaps_[static_cast<std::size_t>(d)], order);
     if (split) *split = last_.split();
     return handed;
   }
@@ -241,7 +244,8 @@ class CoarseLevel {
   }
 
   int q_;
-  int neighbours_ = 0, gap_ = 0;
+  int neighbours_ = 0;
+  std::vector<int> gaps_ = std::vector<int>(static_cast<std::size_t>(q_), 0);
   bool with_gaps_ = false;
   ChildKeys last_{{0, 0, 0}, 0, 1, nullptr, 0, false};
   NeighbourIndex index_;
@@ -343,6 +347,15 @@ class Traversal {
   std::vector<int> gaps_;
 };
 
+// The entropy, in bits, of the n counts freq[at, at + n).
+double entropy_bits(const std::vector<std::uint64_t>& freq, std::size_t at, std::size_t n) {
+  double total = 0, sum = 0;
+  for (std::size_t i = at; i < at + n; ++i) total += static_cast<double>(freq[i]);
+  for (std::size_t i = at; i < at + n; ++i)
+    if (freq[i]) sum -= static_cast<double>(freq[i]) * std::log2(static_cast<double>(freq[i]) / total);
+  return sum;
+}
+
 // Bits of a code-length table plus the symbols it codes.
 std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
   const HuffmanCode code = HuffmanCode::from_frequencies(freq);
@@ -357,7 +370,8 @@ std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
 // the order of the stream; planes is 1 (coder 0) or 2 (coder 2), either with
 // coder 3.
 struct TablePlan {
-  int classes = 1, planes = 1, gap = 0;  // gap > 0: coder 3
+  int classes = 1, planes = 1;
+  std::vector<int> gaps;  // per depth: all 0 coder 0 or 2, all equal coder 3, else coder 4
   std::vector<bool> fresh;                       // [slot]: a table is sent
   std::vector<int> table;                        // [slot]: the table used, -1 for none
   std::vector<std::vector<std::uint64_t>> freq;  // per table
@@ -366,15 +380,27 @@ struct TablePlan {
 
 // freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
 // nodes with w children holding coarse points and plane context x.
-TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes, int gap) {
+// The coder of a plan, from its gap weights.
+OctreeCoder coder_of(const TablePlan& p) {
+  if (std::all_of(p.gaps.begin(), p.gaps.end(), [](int g) { return g == 0; }))
+    return p.planes == 2 ? OctreeCoder::planes : OctreeCoder::plain;
+  return std::all_of(p.gaps.begin(), p.gaps.end(), [&](int g) { return g == p.gaps[0]; }) ? OctreeCoder::gap
+                                                                                              : OctreeCoder::depth_gaps;
+}
+
+TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes,
+                      const std::vector<int>& gaps) {
   TablePlan plan;
   plan.classes = classes;
   plan.planes = planes;
-  plan.gap = gap;
+  plan.gaps = gaps;
   const auto slots = static_cast<std::size_t>(q * classes * planes);
   plan.fresh.assign(slots, false);
   plan.table.assign(slots, -1);
-  plan.bits = (gap > 0 ? 11 : 6) + slots;  // header fields, one flag per slot
+  // Header fields (neighbours, classes; coders 3 and 4: planes and the
+  // weights), then one flag per slot.
+  const OctreeCoder coder = coder_of(plan);
+  plan.bits = 6 + slots + (coder == OctreeCoder::gap ? 5 : coder == OctreeCoder::depth_gaps ? 1 + 4 * q : 0);
   std::vector<std::uint64_t> f(kAlphabet);
   for (int k = 0; k < classes; ++k)
     for (int x = 0; x < planes; ++x) {
@@ -426,9 +452,12 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
-  if (plan.gap > 0) {
+  const OctreeCoder coder = coder_of(plan);
+  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps) {
     w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
-    w.put(static_cast<std::uint32_t>(plan.gap), 4);
+    if (coder == OctreeCoder::gap) w.put(static_cast<std::uint32_t>(plan.gaps[0]), 4);
+    else
+      for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), 4);
   }
   for (std::size_t slot = 0; slot < plan.fresh.size(); ++slot) {
     w.put(plan.fresh[slot] ? 1u : 0u, 1);
@@ -444,8 +473,10 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   return w.finish();
 }
 
-OctreeCoder coder_of(const RefinementParams& p) {
-  return p.gap > 0 ? OctreeCoder::gap : p.plane_contexts ? OctreeCoder::planes : OctreeCoder::plain;
+// The gap weight of each depth that forced parameters ask for.
+std::vector<int> gaps_of(const RefinementParams& p, int q) {
+  if (!p.depth_gaps.empty()) return p.depth_gaps;
+  return std::vector<int>(static_cast<std::size_t>(q), p.gap);
 }
 
 RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::vector<GridPoint>& added_in, int q,
@@ -459,9 +490,18 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   if (added_in.size() >= (std::size_t{1} << 32) - 1)
     fail(Status::invalid_argument, std::string(kWhat) + ": too many added points");
   if (forced && (forced->neighbours < 0 || forced->neighbours > kMaxNeighbours || forced->classes < 1 ||
-                 forced->classes > kMaxClasses || forced->gap < 0 || forced->gap > kMaxGap))
+                 forced->classes > kMaxClasses || forced->gap < 0 || forced->gap > kMaxGap ||
+                 (!forced->depth_gaps.empty() && forced->depth_gaps.size() != static_cast<std::size_t>(q)) ||
+                 std::any_of(forced->depth_gaps.begin(), forced->depth_gaps.end(),
+                             [](int g) { return g < 0 || g > kMaxGap; })))
     fail(Status::invalid_argument, std::string(kWhat) + ": parameters out of range");
-  if (added_in.empty()) return {static_cast<std::uint8_t>(forced ? coder_of(*forced) : OctreeCoder::plain), {}};
+  if (added_in.empty()) {
+    if (!forced) return {static_cast<std::uint8_t>(OctreeCoder::plain), {}};
+    TablePlan p;
+    p.planes = forced->plane_contexts ? 2 : 1;
+    p.gaps = gaps_of(*forced, q);
+    return {static_cast<std::uint8_t>(coder_of(p)), {}};
+  }
 
   std::vector<std::uint64_t> added(added_in.size());
   for (std::size_t i = 0; i < added.size(); ++i) added[i] = morton_key(added_in[i], q);
@@ -478,16 +518,17 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   if (forced) plane_choices = {forced->plane_contexts ? 2 : 1};
   else if (all_coders) plane_choices = {1, 2};
   CoarseLevel level(coarse, q);
-  // The smallest plan for one ranking (neighbours, gap): plan.bits is the
-  // layer's exact length, so plans compare in whole bytes, and only the best
-  // is written. On a tie the earlier one stays (fewer tables, gap 0).
+  // The smallest plan for one ranking (neighbours, gap weights): plan.bits
+  // is the layer's exact length, so plans compare in whole bytes, and only
+  // the best is written. On a tie the earlier one stays (fewer tables, no
+  // weights).
   const auto bytes_of = [](const TablePlan& p) { return (p.bits + 7) / 8; };
-  const auto plan_of = [&](const std::vector<std::uint64_t>& freq, int gap) {
+  const auto plan_of = [&](const std::vector<std::uint64_t>& freq, const std::vector<int>& gaps) {
     std::optional<TablePlan> plan;
     for (int planes : plane_choices)
       for (int classes = 1; classes <= kMaxClasses; ++classes) {
         if (forced && classes != forced->classes) continue;
-        TablePlan p = plan_tables(freq, q, classes, planes, gap);
+        TablePlan p = plan_tables(freq, q, classes, planes, gaps);
         if (!plan || bytes_of(p) < bytes_of(*plan) || (bytes_of(p) == bytes_of(*plan) && planes == plan->planes &&
                                                         p.bits < plan->bits))
           plan = std::move(p);
@@ -500,44 +541,69 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     std::vector<Symbol> symbols;
   };
   std::optional<Trial> best;
-  // One traversal per neighbour count: it gives the symbols for `gap` and
-  // counts those of every weight in `others`, whose plans are compared
-  // without symbols; a better weight is then traversed again for its symbols.
-  const auto trial = [&](int neighbours, int gap, const std::vector<int>& others) {
+  const std::size_t depth_rows = 18 * kAlphabet;  // the freq entries of one depth
+  // One traversal per neighbour count: it gives the symbols for `gaps` and
+  // counts those of every weight in `others`, for every depth. Plans for one
+  // weight at all depths (coder 3), and for each depth's best weight (coder
+  // 4), are compared without symbols; a better ranking is then traversed
+  // again for its symbols.
+  const auto trial = [&](int neighbours, const std::vector<int>& gaps, const std::vector<int>& others) {
     level.set_neighbours(neighbours);
-    level.set_gap(gap, !others.empty());
+    level.set_gaps(gaps, !others.empty());
     Traversal traversal(level, added, q, others);
-    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * 18 * kAlphabet, 0);
+    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * depth_rows, 0);
     for (const Symbol& s : traversal.symbols)
       ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
-    TablePlan plan = plan_of(freq, gap);
-    int better = 0;
+    TablePlan plan = plan_of(freq, gaps);
+    bool better = false;
     for (std::size_t j = 0; j < others.size(); ++j) {
-      TablePlan p = plan_of(traversal.counts[j], others[j]);
-      if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = others[j];
+      TablePlan p = plan_of(traversal.counts[j], std::vector<int>(static_cast<std::size_t>(q), others[j]));
+      if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
+    }
+    if (!others.empty()) {
+      // Each depth's weight: the one whose symbols have the least entropy in
+      // that depth's contexts (w, x) (table costs aside; the plan decides).
+      std::vector<int> mixed(static_cast<std::size_t>(q), 0);
+      std::vector<std::uint64_t> mixed_freq = freq;
+      for (int d = 0; d < q; ++d) {
+        const std::size_t at = static_cast<std::size_t>(d) * depth_rows;
+        const auto cost = [&](const std::vector<std::uint64_t>& f) {
+          double bits = 0;
+          for (std::size_t row = 0; row < 18; ++row) bits += entropy_bits(f, at + row * kAlphabet, kAlphabet);
+          return bits;
+        };
+        double least = cost(freq);
+        for (std::size_t j = 0; j < others.size(); ++j)
+          if (const double c = cost(traversal.counts[j]); c < least) {
+            least = c;
+            mixed[static_cast<std::size_t>(d)] = others[j];
+            std::copy_n(traversal.counts[j].begin() + static_cast<std::ptrdiff_t>(at), depth_rows,
+                        mixed_freq.begin() + static_cast<std::ptrdiff_t>(at));
+          }
+      }
+      TablePlan p = plan_of(mixed_freq, mixed);
+      if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
     }
     if (!best || bytes_of(plan) < bytes_of(best->plan)) {
-      if (better > 0) {
-        level.set_gap(better);
+      if (better) {
+        level.set_gaps(plan.gaps);
         traversal.symbols = Traversal(level, added, q).symbols;
       }
       best = Trial{neighbours, std::move(plan), std::move(traversal.symbols)};
     }
   };
+  const std::vector<int> none(static_cast<std::size_t>(q), 0);
   if (forced) {
-    trial(forced->neighbours, forced->gap, {});
+    trial(forced->neighbours, gaps_of(*forced, q), {});
   } else {
     // The plane through 4 neighbours suits surfaces; the nearest point alone
     // suits volume interiors. With 4 neighbours (and all coders allowed),
-    // coder 3's gap weights 1 to 12 are tried too.
+    // coder 3's and 4's gap weights 1 to 12 are tried too.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
-    trial(neighbours, 0, all_coders && neighbours >= 2 ? std::vector<int>{1, 2, 3, 4, 6, 8, 12} : std::vector<int>{});
-    if (neighbours != 1) trial(1, 0, {});
+    trial(neighbours, none, all_coders && neighbours >= 2 ? std::vector<int>{1, 2, 3, 4, 6, 8, 12} : std::vector<int>{});
+    if (neighbours != 1) trial(1, none, {});
   }
-  const OctreeCoder coder = best->plan.gap > 0       ? OctreeCoder::gap
-                            : best->plan.planes == 2 ? OctreeCoder::planes
-                                                     : OctreeCoder::plain;
-  return {static_cast<std::uint8_t>(coder), write_layer(best->symbols, best->plan, best->neighbours)};
+  return {static_cast<std::uint8_t>(coder_of(best->plan)), write_layer(best->symbols, best->plan, best->neighbours)};
 }
 
 // ---------------------------------------------------------------- decoder
@@ -549,10 +615,12 @@ class Decoder {
       : in_(in), q_(q), n_added_(n_added), planes_(coder == OctreeCoder::plain ? 1 : 2) {
     neighbours_ = static_cast<int>(in.get(4));
     classes_ = static_cast<int>(in.get(2)) + 1;
-    int gap = 0;
-    if (coder == OctreeCoder::gap) {
+    std::vector<int> gaps(static_cast<std::size_t>(q), 0);
+    if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps) {
       planes_ = static_cast<int>(in.get(1)) + 1;
-      gap = static_cast<int>(in.get(4));
+      if (coder == OctreeCoder::gap) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(4)));
+      else
+        for (int& g : gaps) g = static_cast<int>(in.get(4));
     }
     const int per_depth = classes_ * planes_;
     table_.assign(static_cast<std::size_t>(q * per_depth), -1);
@@ -569,7 +637,7 @@ class Decoder {
         }
     level_.emplace(coarse, q);
     level_->set_neighbours(neighbours_);
-    level_->set_gap(gap);
+    level_->set_gaps(gaps);
     visit(0, 0, 0, level_->size(), nullptr);
   }
 
