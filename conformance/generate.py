@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x0d"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x0e"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -333,10 +333,11 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
-def base_ranked_payload(points, q, neighbours, ranked, classes=1):
+def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None):
     """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
     (refdec.child_order over the node centres of each depth); ranked[d]
-    says whether depth d is ranked; `classes` contexts per ranked depth."""
+    says whether depth d is ranked; `classes` contexts per ranked depth.
+    gaps: coder 2 (§8.3) with weight gaps[d] at each ranked depth."""
     syms = []
     for d, nodes, occ_by_node in octree_levels(points, q):
         if not ranked[d]:
@@ -347,7 +348,8 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1):
         nb = refdec.Neighbours(centres, q)
         row = []
         for node in nodes:
-            pi, split = refdec.child_order(node, d, q, 0, centres, nb, neighbours, want_split=True)
+            pi, split = refdec.child_order(node, d, q, 0, centres, nb, neighbours, want_split=True,
+                                           gap=gaps[d] if gaps else 0, gap_from=1)
             occ = occ_by_node[node]
             ctx = min((0, 1, 2, 2, 3)[split], classes - 1)
             row.append((ctx, refdec.E.index(sum(1 << r for r in range(8) if occ >> pi[r] & 1))))
@@ -358,6 +360,8 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1):
     coders = []
     for d in range(q):
         bw.put(1 if ranked[d] else 0, 1)
+        if ranked[d] and gaps:
+            bw.put(gaps[d], 4)
         if ranked[d]:
             # One table per context, of two symbols at least (§8.2): a context
             # with fewer gets phantom symbols 0 and 1.
@@ -372,12 +376,12 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1):
                 coders[d][v[0]].put(bw, v[1])
             else:
                 coders[d][0].put(bw, v)
-    return b"\x01" + bw.bytes()
+    return (b"\x02" if gaps else b"\x01") + bw.bytes()
 
 
-def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1):
+def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None):
     pts = sorted(set(pts))
-    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes), counts=(len(pts),), kind=kind, q=q,
+    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps), counts=(len(pts),), kind=kind, q=q,
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
 
@@ -1169,6 +1173,17 @@ def hb_refn_depth_gaps():
                                    (1, 1, True, 2, [8, 0, 8, 0, 8, 0, 8, 0, 8, 0])])
 
 
+def hb_base_gaps():
+    # BASE coder 2 (gap weights): an evenly spread sphere (a lattice's points
+    # near a sphere), neighbours 10, weights 0 to 15 over the depths, plain
+    # and ranked depths mixed, 3 contexts; and neighbours 1 (no plane: the
+    # weights change nothing).
+    pts = [p for p in lattice_pts(16, 1, (0, 0, 0)) if abs(sum((c - 7.5) ** 2 for c in p) - 36) < 7]
+    a = base_ranked_stream(0, 4, pts, 10, [False, True, True, True], classes=3, gaps=[0, 15, 3, 8])
+    b = base_ranked_stream(1, 8, sphere_pts(300, 8, 95), 1, [True] * 8, classes=2, gaps=[9, 0, 4, 15, 1, 2, 6, 11])
+    return a, b
+
+
 def hb_base_ranked_sphere():
     return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8, classes=4)
 
@@ -1335,6 +1350,10 @@ HANDBUILT = [
      "REFN coder 3 (gap ranking): neighbours 4 with G = 6, plane contexts, 4 classes; G = 15 without plane contexts, 2 classes, unshared tables; neighbours 1 with G = 9 (no plane, the order of 8A.1); neighbours 15 with G = 1", sec("refn", "huff")),
     ("refn-depth-gaps", hb_refn_depth_gaps, P,
      "REFN coder 4 (a gap weight per depth): neighbours 4 with weights 0-15 varying by depth, plane contexts, 3 classes; the same weight 5 at every depth without plane contexts; neighbours 1 with alternating weights (no plane: the order of 8A.1)", sec("refn", "huff")),
+    ("base-gaps", lambda: hb_base_gaps()[0], P,
+     "BASE coder 2 (gap weights): points near a sphere on a lattice (ties), neighbours 10, depth 0 plain, weights 15, 3 and 8 at the ranked depths, 3 contexts", sec("base", "huff")),
+    ("base-gaps-neighbours-1", lambda: hb_base_gaps()[1], P,
+     "BASE coder 2 with neighbours 1 (no plane: the weights change nothing), 2 contexts, kind surface", sec("base", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
      "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
@@ -1559,8 +1578,10 @@ NEGATIVE = [
      lambda: stream_q1(base_with_table(lambda bw: write_table(bw, 256, lengths={0: 1, 1: 1})), flags=1)),
     # layers
     ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
-    ("neg-base-coder", "bad_layer", P, "BASE coder 2", ["8", "13"],
-     lambda: stream_q1(b"\x02" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-gaps-cut", "bad_layer", P, "BASE coder 2 at q = 1 whose payload ends inside the weight of its ranked depth", ["8.3", "13"],
+     lambda: stream_q1(b"\x02" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(1, 1), bw.put(1, 1))))),
+    ("neg-base-coder", "bad_layer", P, "BASE coder 3", ["8", "13"],
+     lambda: stream_q1(b"\x03" + base_payload([(0, 0, 0)], 1)[1:])),
     ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 1: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],
      lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(1, 1), write_table(bw, 256, single=255))))),
     ("neg-base-ranked-single", "bad_layer", P, "BASE coder 1: a one-symbol code at a ranked depth (a 125-byte stream that would ask for 5.5 million nearest-neighbour searches)", ["8.2", "14", "13"],

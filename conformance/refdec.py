@@ -258,15 +258,16 @@ def morton_children(node, d, q):
 def decode_base(payload, q, n, form=1):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
-    if payload[0] not in (0, 1):
+    if payload[0] not in (0, 1, 2):
         raise DecodeError("bad_layer", "BASE: unknown coder %d" % payload[0])
     coder = payload[0]
     br = BitReader(payload, 1, "bad_layer", "BASE")
-    neighbours = br.bits(4) if coder == 1 else 0
-    classes = br.bits(2) + 1 if coder == 1 else 1
-    ranked, tables = [], []
+    neighbours = br.bits(4) if coder >= 1 else 0
+    classes = br.bits(2) + 1 if coder >= 1 else 1
+    ranked, tables, gaps = [], [], []
     for _ in range(q):
-        ranked.append(coder == 1 and br.bits(1) == 1)
+        ranked.append(coder >= 1 and br.bits(1) == 1)
+        gaps.append(br.bits(4) if ranked[-1] and coder == 2 else 0)  # §8.3: the depth's gap weight
         tables.append([read_code(br, 255, form) for _ in range(classes)] if ranked[-1] else [read_code(br, 256, form)])
         if ranked[-1] and any(t.single is not None for t in tables[-1]):
             # §8.2: every ranked node costs a bit
@@ -281,7 +282,9 @@ def decode_base(payload, q, n, form=1):
             nb = Neighbours(centres, q)
         for (X, Y, Z) in nodes:
             if ranked[d]:
-                pi, split = child_order((X, Y, Z), d, q, 0, centres, nb, neighbours, want_split=True)
+                # §8.3: g over the neighbours other than the node itself
+                pi, split = child_order((X, Y, Z), d, q, 0, centres, nb, neighbours, want_split=True, gap=gaps[d],
+                                        gap_from=1)
                 x = (0, 1, 2, 2, 3)[split]
                 s = t[min(x, classes - 1)].decode(br, "bad_layer")
                 rho = E[s]
@@ -388,10 +391,11 @@ def ring(cx, cy, cz, r):
                 yield (cx + dx, cy + dy, cz + r)
 
 
-def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0):
+def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, gap_from=0):
     """§8A.1 ranking: returns pi, pi[r] = child at rank r (and, with
     want_split, how many children lie on the plane's smaller side, §8.2).
-    gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1."""
+    gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1. gap_from:
+    the distances g skip the first gap_from neighbours (§8.3: the node itself)."""
     X, Y, Z = node
     h = 1 << (q - d)
     O = (2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h)
@@ -433,7 +437,7 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0):
         e = V[0] * V[0] + V[1] * V[1] + V[2] * V[2]
         # §8A.4: kappa = 32 t^2 - G k^2 N g, g the squared distance from U to
         # the nearest neighbour (0 without neighbours)
-        g = min((sum((U[a] - p[a]) ** 2 for a in range(3)) for p in P), default=0)
+        g = min((sum((U[a] - p[a]) ** 2 for a in range(3)) for p in P[gap_from:]), default=0)
         kappa = 32 * dot * dot - gap * k * k * N * g
         keys.append((1 - (m >> c & 1), kappa, abs(dot), e, c))
     keys.sort()

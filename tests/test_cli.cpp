@@ -55,9 +55,11 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   CHECK(r.out.find("\"type\": \"HEAD\"") != std::string::npos);
   CHECK(r.out.find("\"points\": 1800") != std::string::npos);
   CHECK(r.out.find("\"kind\": \"surface\"") != std::string::npos);
-  // The base layer's coder is named from its payload (octree or ranked octree).
+  // The base layer's coder is named from its payload (octree, ranked octree
+  // or ranked octree with gap weights).
   const bool named = r.out.find("\"coder\": 0, \"coder_name\": \"octree\"") != std::string::npos ||
-                     r.out.find("\"coder\": 1, \"coder_name\": \"ranked octree\"") != std::string::npos;
+                     r.out.find("\"coder\": 1, \"coder_name\": \"ranked octree\"") != std::string::npos ||
+                     r.out.find("\"coder\": 2, \"coder_name\": \"ranked octree, gap weights\"") != std::string::npos;
   CHECK(named);
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <random>
 #include <set>
@@ -510,13 +511,13 @@ TEST_CASE("malformed refinement streams are rejected, never misread") {
   }
 }
 
-TEST_CASE("base layer: the ranked octree (coder 1) codes surfaces smaller and decodes every set exactly") {
+TEST_CASE("base layer: the ranked octree (coders 1, 2) codes surfaces smaller and decodes every set exactly") {
   // A sampled surface: the plane through the neighbouring node centres
-  // predicts the children, so coder 1 is chosen and is smaller.
+  // predicts the children, so coder 1 or 2 is chosen and is smaller.
   const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
   const auto base = encode_base(sphere, 12);
   REQUIRE(!base.empty());
-  CHECK(base[0] == 1);
+  CHECK((base[0] == 1 || base[0] == 2));
   const auto plain = encode_octree(sphere, 12);
   CHECK(base.size() < plain.size() + 1);
   Points sorted = sphere;
@@ -531,7 +532,7 @@ TEST_CASE("base layer: the ranked octree (coder 1) codes surfaces smaller and de
       sort_canonical(p);
       p.erase(std::unique(p.begin(), p.end()), p.end());
       const auto b = encode_base(p, q);
-      CHECK((b[0] == 0 || b[0] == 1));
+      CHECK((b[0] == 0 || b[0] == 1 || b[0] == 2));
       CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
     }
   }
@@ -539,14 +540,63 @@ TEST_CASE("base layer: the ranked octree (coder 1) codes surfaces smaller and de
   const Points one{{5, 6, 7}};
   CHECK(encode_base(one, 4)[0] == 0);
   // Unknown coder, empty payload, a wrong count.
-  const std::uint8_t two[] = {2, 0};
-  CHECK(status_of([&] { decode_base(two, 2, 4, 1); }) == Status::bad_layer);
-  CHECK(status_of([&] { decode_base(two, 0, 4, 1); }) == Status::bad_layer);
+  const std::uint8_t three[] = {3, 0};
+  CHECK(status_of([&] { decode_base(three, 2, 4, 1); }) == Status::bad_layer);
+  CHECK(status_of([&] { decode_base(three, 0, 4, 1); }) == Status::bad_layer);
   CHECK(status_of([&] { decode_base(base.data(), base.size(), 12, sorted.size() - 1); }) == Status::bad_layer);
   CHECK(status_of([&] { decode_base(base.data(), base.size() - 1, 12, sorted.size()); }) == Status::bad_layer);
 }
 
 // The sorting and Morton helpers every layer decoder ends with.
+TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and the node itself is not a gap") {
+  // Points kept at least r apart on a sphere, as a scan spaces them: at the
+  // depths of one or two points per node, the occupied children lie far from
+  // the neighbouring nodes' centres. Coder 2 costs 4 bits per ranked depth
+  // more than coder 1 for the same symbols, so it is chosen only if the
+  // weights make the symbols cheaper.
+  const Points candidates = quantize(samples::random_sphere_points(30000, 7), 12);
+  Points even;
+  {
+    std::set<std::array<std::uint32_t, 3>> cells;  // buckets of 64 grid units: the spacing test stays local
+    std::map<std::array<std::uint32_t, 3>, std::vector<GridPoint>> grid;
+    const std::int64_t r = 40;
+    for (const GridPoint& c : candidates) {
+      const std::array<std::uint32_t, 3> cell{c[0] / 64, c[1] / 64, c[2] / 64};
+      bool near = false;
+      for (int dx = -1; dx <= 1 && !near; ++dx)
+        for (int dy = -1; dy <= 1 && !near; ++dy)
+          for (int dz = -1; dz <= 1 && !near; ++dz) {
+            const auto it = grid.find({cell[0] + dx, cell[1] + dy, cell[2] + dz});
+            if (it == grid.end()) continue;
+            for (const GridPoint& p : it->second) {
+              std::int64_t d2 = 0;
+              for (std::size_t a = 0; a < 3; ++a) d2 += (std::int64_t{p[a]} - c[a]) * (std::int64_t{p[a]} - c[a]);
+              near = near || d2 < r * r;
+            }
+          }
+      if (!near) grid[cell].push_back(c), even.push_back(c);
+    }
+  }
+  sort_canonical(even);
+  REQUIRE(even.size() > 2000);
+  const auto base = encode_base(even, 12);
+  CHECK(base[0] == 2);
+  CHECK(decode_base(base.data(), base.size(), 12, even.size()) == even);
+  // The weights rank by distance to the neighbours other than the node
+  // itself: with the node's own centre (distance 0 from no child, and the
+  // same from all eight) the gap term could not tell children apart.
+  // The node (centre 4,4,4) first, then three nodes beside it on the plane
+  // z = 4: children (2,2,z) are the farthest from those three.
+  const Doubled nb[4] = {{4, 4, 4}, {12, 4, 4}, {12, 8, 4}, {4, 12, 4}};
+  std::array<int, 8> plain{}, skip{}, all{};
+  ChildKeys(GridPoint{0, 0, 0}, 1, 3, nb, 4, false).order(0u, 0, plain);
+  ChildKeys(GridPoint{0, 0, 0}, 1, 3, nb, 4, true, 1).order(0u, 15, skip);
+  ChildKeys(GridPoint{0, 0, 0}, 1, 3, nb, 4, true, 0).order(0u, 15, all);
+  CHECK((plain[0] == 6 || plain[0] == 7));  // nearest the neighbours' centroid
+  CHECK((skip[0] == 0 || skip[0] == 1));
+  CHECK(all == plain);  // every child is equally far from the node's own centre
+}
+
 TEST_CASE("radix_sort, morton_point and sort_canonical agree with the plain definitions") {
   std::mt19937_64 rng(5);
   for (int bits : {0, 1, 7, 13, 24, 36, 47, 63, 64}) {

@@ -27,6 +27,7 @@ const char* base_coder_name(int coder) {
   switch (coder) {
     case 0: return "octree";
     case 1: return "ranked octree";
+    case 2: return "ranked octree, gap weights";
     default: return "unknown";
   }
 }

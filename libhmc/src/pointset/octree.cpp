@@ -166,7 +166,9 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
 
 namespace {
 
-constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1;
+constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2;
+// The gap weights the reference encoder tries at a ranked depth (coder 2).
+constexpr std::array<int, 7> kGapChoices{0, 1, 2, 3, 4, 6, 8};
 constexpr int kMaxNeighbours = 15;  // 4-bit field
 constexpr int kBaseNeighbours = 10;  // what the reference encoder uses
 
@@ -204,7 +206,16 @@ class DepthNodes {
   /// the k nearest node centres of the depth, the node's own included.
   /// Returns the node's context (spec 8.2): from how many children lie on
   /// the smaller side of the plane, 0 | 1 | 2-3 | 4 -> 0 | 1 | 2 | 3.
-  int rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order) const {
+  int rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order, int gap = 0) const {
+    int context = 0;
+    keys(node, i, neighbours, gap > 0, context).order(0u, gap, order);
+    return context;
+  }
+
+  /// The keys that rank node i's children, with its context; `with_gaps`:
+  /// for gap weights (coder 2, spec 8.3), the distances to the nearest
+  /// neighbour other than the node itself (the first).
+  ChildKeys keys(std::uint64_t node, std::size_t i, int neighbours, bool with_gaps, int& context) const {
     const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
     std::array<std::uint32_t, kMaxNeighbours> near{};
     int found = lattice_ ? lattice_->nearest(i, k, near.data()) : -1;
@@ -220,9 +231,10 @@ class DepthNodes {
       nb[static_cast<std::size_t>(j)] = {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[1]),
                                          static_cast<std::int32_t>(c[2])};
     }
-    int split = 0;
-    rank_children(morton_point(node, d_), d_, q_, nb.data(), found, 0u, order, &split);
-    return split <= 1 ? split : split <= 3 ? 2 : 3;
+    ChildKeys out(morton_point(node, d_), d_, q_, nb.data(), found, with_gaps, 1);
+    const int split = out.split();
+    context = split <= 1 ? split : split <= 3 ? 2 : 3;
+    return out;
   }
 
   /// The ranked occupancy of node i (its index in E, spec 8.2) for the
@@ -230,6 +242,23 @@ class DepthNodes {
   std::uint8_t symbol(std::uint64_t node, std::size_t i, unsigned occupancy, int& context) const {
     std::array<int, 8> order{};
     context = rank(node, i, kBaseNeighbours, order);
+    return ranked_symbol(order, occupancy);
+  }
+
+  /// The symbols of node i for every weight of kGapChoices.
+  std::array<std::uint8_t, kGapChoices.size()> symbols(std::uint64_t node, std::size_t i, unsigned occupancy,
+                                                       int& context) const {
+    const ChildKeys k = keys(node, i, kBaseNeighbours, true, context);
+    std::array<std::uint8_t, kGapChoices.size()> out{};
+    std::array<int, 8> order{};
+    for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
+      k.order(0u, kGapChoices[g], order);
+      out[g] = ranked_symbol(order, occupancy);
+    }
+    return out;
+  }
+
+  static std::uint8_t ranked_symbol(const std::array<int, 8>& order, unsigned occupancy) {
     unsigned r = 0;
     for (std::size_t j = 0; j < 8; ++j) r |= ((occupancy >> order[j]) & 1u) << j;
     return occupancy_order().index[r];
@@ -254,9 +283,11 @@ std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const Hu
 
 // Coder 1 with `classes` contexts per ranked depth, from the plain and
 // ranked symbols of every depth (ranked[d][i], context[d][i]).
+// Coder 2 when `gaps` (the gap weight of each depth) is given.
 std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels, int q, int classes,
                                        const std::vector<std::vector<std::uint8_t>>& ranked_sym,
-                                       const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked) {
+                                       const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked,
+                                       const std::vector<int>* gaps = nullptr) {
   BitWriter w;
   w.put(kBaseNeighbours, 4);
   w.put(static_cast<std::uint32_t>(classes - 1), 2);
@@ -285,10 +316,12 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
       ranked_bits += table_and_symbols(f, ranked_codes.back());
     }
     // Rank only where it pays for the decoder's searches: 2% of the depth.
+    if (gaps) ranked_bits += 4;  // the depth's weight
     const bool use = !ranked_sym[sd].empty() && 100 * ranked_bits < 98 * plain_bits;
     ranked[sd] = use;
     any_ranked = any_ranked || use;
     w.put(use ? 1 : 0, 1);
+    if (use && gaps) w.put(static_cast<std::uint32_t>((*gaps)[sd]), 4);
     if (use) {
       codes[sd] = std::move(ranked_codes);
     } else {
@@ -341,31 +374,61 @@ bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupan
   return entropy_bits(ranked) < 0.995 * entropy_bits(plain);
 }
 
+// Coder 1 or 2 (written into `coder`), whichever is smaller: the ranked
+// symbols of every depth without and with its best gap weight.
 std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
-                                        int q, bool& any_ranked) {
-  std::vector<std::vector<std::uint8_t>> ranked_sym(static_cast<std::size_t>(q)), context(static_cast<std::size_t>(q));
+                                        int q, bool& any_ranked, std::uint8_t& coder) {
+  const auto sq = static_cast<std::size_t>(q);
+  std::vector<std::vector<std::uint8_t>> ranked_sym(sq), gap_sym(sq), context(sq);
+  std::vector<int> gaps(sq, 0);
+  std::vector<std::uint8_t> all;
   for (int d = 0; d < q; ++d) {
+    const auto sd = static_cast<std::size_t>(d);
     const auto nodes = nodes_at(keys, d, q);
-    const auto& occ = levels[static_cast<std::size_t>(d)].occupancy;
-    if (!ranking_may_pay(nodes, levels[static_cast<std::size_t>(d)], d, q)) continue;
-    auto& sym = ranked_sym[static_cast<std::size_t>(d)];
-    auto& ctx = context[static_cast<std::size_t>(d)];
+    const auto& occ = levels[sd].occupancy;
+    if (!ranking_may_pay(nodes, levels[sd], d, q)) continue;
+    auto& sym = ranked_sym[sd];
+    auto& ctx = context[sd];
     sym.resize(occ.size());
     ctx.resize(occ.size());
+    all.resize(occ.size() * kGapChoices.size());
+    // Per weight, the symbols' counts in each of the 4 contexts.
+    std::vector<std::vector<std::uint64_t>> freq(kGapChoices.size(), std::vector<std::uint64_t>(4 * 255, 0));
     const DepthNodes depth(nodes, d, q);
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       int c = 0;
-      sym[i] = depth.symbol(nodes[i], i, occ[i], c);
+      const auto s = depth.symbols(nodes[i], i, occ[i], c);
       ctx[i] = static_cast<std::uint8_t>(c);
+      sym[i] = s[0];
+      for (std::size_t g = 0; g < s.size(); ++g) {
+        all[i * s.size() + g] = s[g];
+        ++freq[g][static_cast<std::size_t>(c) * 255 + s[g]];
+      }
     }
+    // The weight whose symbols have the least entropy in the 4 contexts.
+    std::size_t chosen = 0;
+    double least = 0;
+    for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
+      double bits = 0;
+      for (std::size_t c = 0; c < 4; ++c)
+        bits += entropy_bits(std::vector<std::uint64_t>(freq[g].begin() + static_cast<std::ptrdiff_t>(c * 255),
+                                                        freq[g].begin() + static_cast<std::ptrdiff_t>(c * 255 + 255)));
+      if (g == 0 || bits < least) least = bits, chosen = g;
+    }
+    gaps[sd] = kGapChoices[chosen];
+    gap_sym[sd].resize(occ.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i) gap_sym[sd][i] = all[i * kGapChoices.size() + chosen];
   }
-  // 1, 2 or 4 contexts: the smallest stream.
+  // 1, 2 or 4 contexts, coder 1 or 2: the smallest stream.
   std::vector<std::uint8_t> best;
-  for (int classes : {1, 2, 4}) {
-    bool any = false;
-    auto bytes = write_ranked(levels, q, classes, ranked_sym, context, any);
-    if (best.empty() || bytes.size() < best.size()) best = std::move(bytes), any_ranked = any;
-  }
+  for (const bool with_gaps : {false, true})
+    for (int classes : {1, 2, 4}) {
+      bool any = false;
+      auto bytes = with_gaps ? write_ranked(levels, q, classes, gap_sym, context, any, &gaps)
+                             : write_ranked(levels, q, classes, ranked_sym, context, any);
+      if (best.empty() || bytes.size() < best.size())
+        best = std::move(bytes), any_ranked = any, coder = with_gaps ? kGapCoder : kRankedCoder;
+    }
   return best;
 }
 
@@ -382,7 +445,7 @@ constexpr std::array<std::uint8_t, 256> kChildCount = [] {
 // codes[d][j]: the table of depth d for context j (one at plain depths).
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,
-                                    int neighbours) {
+                                    int neighbours, const std::vector<int>& gaps) {
   const auto& E = occupancy_order();
   std::vector<std::uint64_t> nodes{0}, next;
   std::array<int, 8> order{};
@@ -395,7 +458,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       std::uint32_t occ = 0;
       if (depth) {
-        const int context = depth->rank(nodes[i], i, neighbours, order);
+        const int context = depth->rank(nodes[i], i, neighbours, order, gaps[static_cast<std::size_t>(d)]);
         const std::uint32_t s = table[std::min<std::size_t>(static_cast<std::size_t>(context), table.size() - 1)].decode(in);
         const unsigned r = E.occupancy[s];
         for (std::size_t j = 0; j < 8; ++j) occ |= ((r >> j) & 1u) << order[j];
@@ -416,14 +479,18 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
   return canonical_from_morton(nodes, q, next);  // next: spare capacity for the sort
 }
 
-std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
+// Coder 1, or coder 2 (`with_gaps`: a gap weight per ranked depth).
+std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form,
+                                     bool with_gaps) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
   std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
   std::vector<bool> ranked;
+  std::vector<int> gaps(static_cast<std::size_t>(q), 0);
   for (int d = 0; d < q; ++d) {
     ranked.push_back(in.get(1) == 1);
+    if (ranked.back() && with_gaps) gaps[static_cast<std::size_t>(d)] = static_cast<int>(in.get(4));
     const std::string what = "BASE ranked octree table for depth " + std::to_string(d);
     if (!ranked.back()) {
       codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, what, form));
@@ -437,7 +504,7 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
         fail(Status::bad_layer, what + " context " + std::to_string(j) + ": a one-symbol code at a ranked depth");
     }
   }
-  return decode_nodes(in, q, n, codes, ranked, neighbours);
+  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps);
 }
 
 }  // namespace
@@ -447,13 +514,14 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
   const auto levels = occupancies(keys, q);
   auto plain = write_octree(levels, q);
   bool any_ranked = false;
-  auto ranked = encode_ranked(levels, keys, q, any_ranked);
+  std::uint8_t ranked_coder = kRankedCoder;
+  auto ranked = encode_ranked(levels, keys, q, any_ranked, ranked_coder);
   std::vector<std::uint8_t> out;
   // Coder 1 only when it saves 1% of the layer: its searches cost decoding
   // time (on a million random points in a ball it saves 0.05% and makes
   // points-only decoding 25% slower).
   const bool use_ranked = any_ranked && 100 * ranked.size() < 99 * plain.size();
-  out.push_back(use_ranked ? kRankedCoder : kPlainCoder);
+  out.push_back(use_ranked ? ranked_coder : kPlainCoder);
   const auto& body = use_ranked ? ranked : plain;
   out.insert(out.end(), body.begin(), body.end());
   return out;
@@ -462,7 +530,8 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
   if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n, form);
-  if (data[0] == kRankedCoder) return decode_ranked(data + 1, size - 1, q, n, form);
+  if (data[0] == kRankedCoder || data[0] == kGapCoder)
+    return decode_ranked(data + 1, size - 1, q, n, form, data[0] == kGapCoder);
   fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
 }
 
@@ -471,7 +540,8 @@ std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size,
   std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d)
     codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, "BASE octree table for depth " + std::to_string(d), form));
-  return decode_nodes(in, q, n, codes, std::vector<bool>(static_cast<std::size_t>(q), false), 0);
+  return decode_nodes(in, q, n, codes, std::vector<bool>(static_cast<std::size_t>(q), false), 0,
+                      std::vector<int>(static_cast<std::size_t>(q), 0));
 }
 
 }  // namespace hmc::detail

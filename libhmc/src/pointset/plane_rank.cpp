@@ -46,7 +46,8 @@ void reduce(std::array<std::int64_t, N>& v, int bits) {
 
 }  // namespace
 
-ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, bool with_gaps) {
+ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, bool with_gaps,
+                     int gap_from) {
   const std::int64_t h = std::int64_t{1} << (q - d);  // node side
   std::array<std::int64_t, 3> s{0, 0, 0};
   std::array<std::int64_t, 6> ss{};  // xx yy zz xy xz yz
@@ -93,11 +94,11 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   // t_c / (k |n|) is the child's distance to the plane, so both terms are
   // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^101.
   const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  if (!with_gaps || n2 == 0) return;
+  if (!with_gaps || n2 == 0 || gap_from >= k) return;
   weight_ = std::int64_t{k} * k * n2;
   for (std::size_t c = 0; c < 8; ++c) {
     std::int64_t g = INT64_MAX;
-    for (int i = 0; i < k; ++i) {
+    for (int i = gap_from; i < k; ++i) {
       std::int64_t d2 = 0;
       for (std::size_t a = 0; a < 3; ++a) {
         const std::int64_t bit = (c >> (2 - a)) & 1;
@@ -129,8 +130,8 @@ void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) c
 }
 
 void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
-                   std::array<int, 8>& order, int* split, int gap) {
-  const ChildKeys keys(p, d, q, neighbours, k, gap > 0);
+                   std::array<int, 8>& order, int* split, int gap, int gap_from) {
+  const ChildKeys keys(p, d, q, neighbours, k, gap > 0, gap_from);
   keys.order(first_mask, gap, order);
   if (split) *split = keys.split();
 }

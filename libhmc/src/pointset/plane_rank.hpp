@@ -32,7 +32,9 @@ using Doubled = std::array<std::int32_t, 3>;
 /// that the encoder can rank the children for several gap weights.
 class ChildKeys {
  public:
-  ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps);
+  /// `gap_from`: the distances to the nearest neighbour skip the first
+  /// gap_from neighbours (the base coder's node itself, spec 8.3).
+  ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps, int gap_from = 0);
   /// How many children lie on the smaller side of the fitted plane (0 to 4).
   int split() const { return split_; }
   /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;
@@ -56,6 +58,6 @@ class ChildKeys {
 /// nearest neighbour), both in units of the plane's scale, so that children
 /// far from every neighbour come earlier; gap 0 is the plain ranking.
 void rank_children(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,
-                   std::array<int, 8>& order, int* split = nullptr, int gap = 0);
+                   std::array<int, 8>& order, int* split = nullptr, int gap = 0, int gap_from = 0);
 
 }  // namespace hmc::detail
