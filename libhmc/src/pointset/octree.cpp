@@ -168,7 +168,7 @@ namespace {
 
 constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2;
 // The gap weights the reference encoder tries at a ranked depth (coder 2).
-constexpr std::array<int, 7> kGapChoices{0, 1, 2, 3, 4, 6, 8};
+constexpr std::array<int, 9> kGapChoices{0, 1, 2, 3, 4, 6, 8, 11, 15};
 constexpr int kMaxNeighbours = 15;  // 4-bit field
 constexpr int kBaseNeighbours = 10;  // what the reference encoder uses
 
@@ -405,14 +405,23 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
         ++freq[g][static_cast<std::size_t>(c) * 255 + s[g]];
       }
     }
-    // The weight whose symbols have the least entropy in the 4 contexts.
+    // The weight whose symbols cost the fewest bits, tables included, with
+    // the 4 contexts merged into 1, 2 or 4 as write_ranked may merge them.
     std::size_t chosen = 0;
     double least = 0;
     for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
       double bits = 0;
-      for (std::size_t c = 0; c < 4; ++c)
-        bits += entropy_bits(std::vector<std::uint64_t>(freq[g].begin() + static_cast<std::ptrdiff_t>(c * 255),
-                                                        freq[g].begin() + static_cast<std::ptrdiff_t>(c * 255 + 255)));
+      for (std::size_t classes : {1, 2, 4}) {
+        std::vector<std::vector<std::uint64_t>> merged(classes, std::vector<std::uint64_t>(255, 0));
+        for (std::size_t c = 0; c < 4; ++c)
+          for (std::size_t v = 0; v < 255; ++v) merged[std::min(c, classes - 1)][v] += freq[g][c * 255 + v];
+        for (auto& f : merged) {
+          auto used = std::count_if(f.begin(), f.end(), [](std::uint64_t v) { return v != 0; });
+          for (std::size_t x = 0; x < f.size() && used < 2; ++x)
+            if (f[x] == 0) f[x] = 1, ++used;
+          bits += static_cast<double>(table_and_symbols(f, HuffmanCode::from_frequencies(f)));
+        }
+      }
       if (g == 0 || bits < least) least = bits, chosen = g;
     }
     gaps[sd] = kGapChoices[chosen];
