@@ -68,6 +68,19 @@ struct Split {
   Points coarse, added;
 };
 
+// `bytes` decode to the added points as coder `right`; read as coder
+// `wrong`, whose header differs, they fail or give another set.
+void check_coders(const std::vector<std::uint8_t>& bytes, const Split& s, int q, OctreeCoder right,
+                  OctreeCoder wrong) {
+  CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas, right) ==
+        sorted(s.added));
+  Points other;
+  const Status st = status_of([&] {
+    other = decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas, wrong);
+  });
+  CHECK((st == Status::bad_layer || st == Status::bad_huffman_table || (st == Status::ok && other != sorted(s.added))));
+}
+
 // Puts each point in `added` when pick(i) holds; the coarse part is canonical.
 Split split_by(const Points& all, const std::function<bool(std::size_t)>& pick) {
   Split s;
@@ -638,14 +651,8 @@ TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the small
       CAPTURE(classes);
       RefinementParams p = params(k, classes);
       p.plane_contexts = true;
-      const auto bytes = encode_refinement(s.coarse, s.added, q, p);
-      CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                              OctreeCoder::planes) == sorted(s.added));
       // Read as coder 0, the slot flags and tables no longer line up.
-      Points as_plain;
-      const Status st =
-          status_of([&] { as_plain = decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size()); });
-      CHECK((st == Status::bad_layer || st == Status::bad_huffman_table || (st == Status::ok && as_plain != sorted(s.added))));
+      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::planes, OctreeCoder::plain);
     }
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
   REQUIRE((layer.coder == 0 || layer.coder == 2 || layer.coder == 3 || layer.coder == 4));
@@ -729,17 +736,8 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
         RefinementParams p = params(k, 2);
         p.plane_contexts = planes;
         p.gap = gap;
-        const auto bytes = encode_refinement(s.coarse, s.added, q, p);
-        CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                                OctreeCoder::gap) == sorted(s.added));
         // Read as coder 2, the header's planes and gap fields become slot flags.
-        Points as_planes;
-        const Status st = status_of([&] {
-          as_planes = decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                                        OctreeCoder::planes);
-        });
-        CHECK((st == Status::bad_layer || st == Status::bad_huffman_table ||
-               (st == Status::ok && as_planes != sorted(s.added))));
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::gap, OctreeCoder::planes);
       }
   // The encoder's choice: coder 3 or 4, at least 2 % smaller than the best
   // ranking without the gap term (coders 0 and 2, 4 neighbours).
@@ -768,23 +766,17 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
     return encode_refinement(s.coarse, s.added, q, p);
   };
   const std::vector<std::vector<int>> choices{
-      {0, 0, 0, 0, 0, 0, 2, 6, 8, 4, 2, 1}, {15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4}, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1}};
+      {0, 0, 0, 0, 0, 0, 2, 6, 8, 4, 2, 1},
+      {15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4},
+      {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1}};
   std::set<std::vector<std::uint8_t>> distinct;
   for (const auto& gaps : choices)
     for (bool planes : {false, true}) {
       CAPTURE(planes);
       const auto bytes = depth_coded(gaps, planes);
       distinct.insert(bytes);
-      CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                              OctreeCoder::depth_gaps) == sorted(s.added));
       // Read as coder 3, the weights of depths 1 on become slot flags.
-      Points as_gap;
-      const Status st = status_of([&] {
-        as_gap = decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                                   OctreeCoder::gap);
-      });
-      CHECK((st == Status::bad_layer || st == Status::bad_huffman_table ||
-             (st == Status::ok && as_gap != sorted(s.added))));
+      check_coders(bytes, s, q, OctreeCoder::depth_gaps, OctreeCoder::gap);
     }
   CHECK(distinct.size() == 2 * choices.size());
   // The same weight at every depth is coder 3 (RefinementParams): the same

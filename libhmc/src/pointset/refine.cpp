@@ -600,7 +600,8 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     // suits volume interiors. With 4 neighbours (and all coders allowed),
     // coder 3's and 4's gap weights 1 to 12 are tried too.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
-    trial(neighbours, none, all_coders && neighbours >= 2 ? std::vector<int>{1, 2, 3, 4, 6, 8, 12} : std::vector<int>{});
+    const std::vector<int> weights{1, 2, 3, 4, 6, 8, 12};
+    trial(neighbours, none, all_coders && neighbours >= 2 ? weights : std::vector<int>{});
     if (neighbours != 1) trial(1, none, {});
   }
   return {static_cast<std::uint8_t>(coder_of(best->plan)), write_layer(best->symbols, best->plan, best->neighbours)};
