@@ -2,6 +2,7 @@
 #include "entropy/huffman.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace hmc::detail {
@@ -15,6 +16,14 @@ int symbol_width(std::uint32_t alphabet) {
 }
 
 }  // namespace
+
+double entropy_bits(const std::uint64_t* freq, std::size_t n) {
+  double total = 0, bits = 0;
+  for (std::size_t i = 0; i < n; ++i) total += static_cast<double>(freq[i]);
+  for (std::size_t i = 0; i < n; ++i)
+    if (freq[i]) bits -= static_cast<double>(freq[i]) * std::log2(static_cast<double>(freq[i]) / total);
+  return bits;
+}
 
 std::vector<std::uint8_t> huffman_lengths(const std::vector<std::uint64_t>& freq, int max_len) {
   std::vector<std::uint8_t> len(freq.size(), 0);

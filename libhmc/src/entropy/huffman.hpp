@@ -19,6 +19,10 @@ constexpr int kHuffmanMaxLength = 15;
 /// 0 as well (it is sent with the single-symbol form and costs no bits).
 std::vector<std::uint8_t> huffman_lengths(const std::vector<std::uint64_t>& freq, int max_len = kHuffmanMaxLength);
 
+/// The empirical entropy, in bits, of the n symbol counts freq[0, n): what
+/// an ideal code of them would cost, tables aside (encoders' estimates).
+double entropy_bits(const std::uint64_t* freq, std::size_t n);
+
 /// The two syntaxes of a code-length table (spec 7.1): each length in 4 bits
 /// (streams whose HEAD flag bit 0 is clear), or each length as a token that
 /// gives its difference from the previous length (the bit set; what the

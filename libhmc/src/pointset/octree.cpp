@@ -258,12 +258,6 @@ class DepthNodes {
     return out;
   }
 
-  static std::uint8_t ranked_symbol(const std::array<int, 8>& order, unsigned occupancy) {
-    unsigned r = 0;
-    for (std::size_t j = 0; j < 8; ++j) r |= ((occupancy >> order[j]) & 1u) << j;
-    return occupancy_order().index[r];
-  }
-
  private:
   static constexpr double kDenseCells = 16.0;    // nodes per occupied block of 8^3 cells
   static constexpr double kDenseBuckets = 64.0;   // nodes per occupied block of 8^3 buckets
@@ -279,6 +273,16 @@ std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const Hu
   BitWriter w;
   code.write(w);
   return w.bit_count() + code.cost(freq);
+}
+
+// A ranked depth's codes have two symbols at least (spec 8.2), so that every
+// ranked node costs a bit: the counts with unused symbols given a phantom
+// count until two are used, for building the code.
+std::vector<std::uint64_t> two_symbols_at_least(std::vector<std::uint64_t> freq) {
+  auto used = std::count_if(freq.begin(), freq.end(), [](std::uint64_t v) { return v != 0; });
+  for (std::size_t x = 0; x < freq.size() && used < 2; ++x)
+    if (freq[x] == 0) freq[x] = 1, ++used;
+  return freq;
 }
 
 // Coder 1 with `classes` contexts per ranked depth, from the plain and
@@ -306,13 +310,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
     std::vector<HuffmanCode> ranked_codes;
     std::uint64_t ranked_bits = 0;
     for (const auto& f : freq) {
-      // A ranked depth's codes have two symbols at least (spec 8.2), so that
-      // every ranked node costs a bit: give unused symbols a phantom count.
-      std::vector<std::uint64_t> g = f;
-      auto used = std::count_if(g.begin(), g.end(), [](std::uint64_t v) { return v != 0; });
-      for (std::size_t x = 0; x < g.size() && used < 2; ++x)
-        if (g[x] == 0) g[x] = 1, ++used;
-      ranked_codes.push_back(HuffmanCode::from_frequencies(g));
+      ranked_codes.push_back(HuffmanCode::from_frequencies(two_symbols_at_least(f)));
       ranked_bits += table_and_symbols(f, ranked_codes.back());
     }
     // Rank only where it pays for the decoder's searches: 2% of the depth.
@@ -341,14 +339,6 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   return w.finish();
 }
 
-// Entropy in bits of a symbol histogram.
-double entropy_bits(const std::vector<std::uint64_t>& freq) {
-  double total = 0, bits = 0;
-  for (auto f : freq) total += static_cast<double>(f);
-  for (auto f : freq)
-    if (f) bits -= static_cast<double>(f) * std::log2(static_cast<double>(f) / total);
-  return bits;
-}
 
 // Whether ranking a large depth may pay, judged on a Morton-contiguous
 // (so spatially compact) block of its nodes: 8,192 nodes indexed by
@@ -371,7 +361,7 @@ bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupan
     ++plain[o];
     ++ranked[depth.symbol(block[i], i, o, context)];
   }
-  return entropy_bits(ranked) < 0.995 * entropy_bits(plain);
+  return entropy_bits(ranked.data(), ranked.size()) < 0.995 * entropy_bits(plain.data(), plain.size());
 }
 
 // Coder 1 or 2 (written into `coder`), whichever is smaller: the ranked
@@ -415,11 +405,9 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
         std::vector<std::vector<std::uint64_t>> merged(classes, std::vector<std::uint64_t>(255, 0));
         for (std::size_t c = 0; c < 4; ++c)
           for (std::size_t v = 0; v < 255; ++v) merged[std::min(c, classes - 1)][v] += freq[g][c * 255 + v];
-        for (auto& f : merged) {
-          auto used = std::count_if(f.begin(), f.end(), [](std::uint64_t v) { return v != 0; });
-          for (std::size_t x = 0; x < f.size() && used < 2; ++x)
-            if (f[x] == 0) f[x] = 1, ++used;
-          bits += static_cast<double>(table_and_symbols(f, HuffmanCode::from_frequencies(f)));
+        for (const auto& f : merged) {
+          const auto padded = two_symbols_at_least(f);
+          bits += static_cast<double>(table_and_symbols(padded, HuffmanCode::from_frequencies(padded)));
         }
       }
       if (g == 0 || bits < least) least = bits, chosen = g;
@@ -455,7 +443,6 @@ constexpr std::array<std::uint8_t, 256> kChildCount = [] {
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,
                                     int neighbours, const std::vector<int>& gaps) {
-  const auto& E = occupancy_order();
   std::vector<std::uint64_t> nodes{0}, next;
   std::array<int, 8> order{};
   for (int d = 0; d < q; ++d) {
@@ -469,8 +456,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
       if (depth) {
         const int context = depth->rank(nodes[i], i, neighbours, order, gaps[static_cast<std::size_t>(d)]);
         const std::uint32_t s = table[std::min<std::size_t>(static_cast<std::size_t>(context), table.size() - 1)].decode(in);
-        const unsigned r = E.occupancy[s];
-        for (std::size_t j = 0; j < 8; ++j) occ |= ((r >> j) & 1u) << order[j];
+        occ = occupancy_of(order, s);
       } else if ((occ = table[0].decode(in)) == 0) {
         fail(Status::bad_layer, "BASE octree: empty occupancy at depth " + std::to_string(d));
       }

@@ -22,6 +22,24 @@ struct OccupancyOrder {
 };
 const OccupancyOrder& occupancy_order();
 
+/// The symbol of `occupancy` (spec 8A.1, "Symbols") when the children are
+/// ranked by `order` (order[r] = the child of rank r): the index in E of the
+/// ranked occupancy.
+inline std::uint8_t ranked_symbol(const std::array<int, 8>& order, unsigned occupancy) {
+  unsigned ranked = 0;
+  for (std::size_t r = 0; r < 8; ++r) ranked |= ((occupancy >> order[r]) & 1u) << r;
+  return occupancy_order().index[ranked];
+}
+
+/// The occupancy that `symbol` stands for when the children are ranked by
+/// `order`: the inverse of ranked_symbol.
+inline unsigned occupancy_of(const std::array<int, 8>& order, std::uint32_t symbol) {
+  const unsigned ranked = occupancy_order().occupancy[symbol];
+  unsigned occupancy = 0;
+  for (std::size_t r = 0; r < 8; ++r) occupancy |= ((ranked >> r) & 1u) << order[r];
+  return occupancy;
+}
+
 int popcount8(unsigned v);
 
 /// Point in doubled grid coordinates (below 2^22).

@@ -322,19 +322,14 @@ class Traversal {
     std::array<int, 8> order{};
     int split = 0;
     const CoarseLevel::Candidates* handed = coarse_.rank(d, key, mask, inherited, fresh, order, &split);
-    const auto ranked_symbol = [occ](const std::array<int, 8>& o) {
-      unsigned ranked = 0;
-      for (std::size_t r = 0; r < 8; ++r) ranked |= ((occ >> o[r]) & 1u) << r;
-      return occupancy_order().index[ranked];
-    };
-    const Symbol symbol{static_cast<std::uint8_t>(d), static_cast<std::uint8_t>(popcount8(mask)), ranked_symbol(order),
-                        plane_context(split)};
+    const Symbol symbol{static_cast<std::uint8_t>(d), static_cast<std::uint8_t>(popcount8(mask)),
+                        ranked_symbol(order, occ), plane_context(split)};
     symbols.push_back(symbol);
     const std::size_t row = (static_cast<std::size_t>(d) * 9 + symbol.weight) * 2 + symbol.plane;
     for (std::size_t j = 0; j < gaps_.size(); ++j) {
       std::array<int, 8> other{};
       coarse_.last_keys().order(mask, gaps_[j], other);
-      ++counts[j][row * kAlphabet + ranked_symbol(other)];
+      ++counts[j][row * kAlphabet + ranked_symbol(other, occ)];
     }
     if (d + 1 == q_) return;
     for (std::size_t c = 0; c < 8; ++c)
@@ -346,15 +341,6 @@ class Traversal {
   int q_;
   std::vector<int> gaps_;
 };
-
-// The entropy, in bits, of the n counts freq[at, at + n).
-double entropy_bits(const std::vector<std::uint64_t>& freq, std::size_t at, std::size_t n) {
-  double total = 0, sum = 0;
-  for (std::size_t i = at; i < at + n; ++i) total += static_cast<double>(freq[i]);
-  for (std::size_t i = at; i < at + n; ++i)
-    if (freq[i]) sum -= static_cast<double>(freq[i]) * std::log2(static_cast<double>(freq[i]) / total);
-  return sum;
-}
 
 // Bits of a code-length table plus the symbols it codes.
 std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
@@ -378,8 +364,6 @@ struct TablePlan {
   std::uint64_t bits = 0;                        // header, tables and symbols
 };
 
-// freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
-// nodes with w children holding coarse points and plane context x.
 // The coder of a plan, from its gap weights.
 OctreeCoder coder_of(const TablePlan& p) {
   if (std::all_of(p.gaps.begin(), p.gaps.end(), [](int g) { return g == 0; }))
@@ -388,6 +372,8 @@ OctreeCoder coder_of(const TablePlan& p) {
                                                                                               : OctreeCoder::depth_gaps;
 }
 
+// freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
+// nodes with w children holding coarse points and plane context x.
 TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes,
                       const std::vector<int>& gaps) {
   TablePlan plan;
@@ -569,7 +555,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
         const std::size_t at = static_cast<std::size_t>(d) * depth_rows;
         const auto cost = [&](const std::vector<std::uint64_t>& f) {
           double bits = 0;
-          for (std::size_t row = 0; row < 18; ++row) bits += entropy_bits(f, at + row * kAlphabet, kAlphabet);
+          for (std::size_t row = 0; row < 18; ++row) bits += entropy_bits(f.data() + at + row * kAlphabet, kAlphabet);
           return bits;
         };
         double least = cost(freq);
@@ -660,9 +646,7 @@ class Decoder {
     const int x = planes_ == 2 ? plane_context(split) : 0;
     const int t = table_[static_cast<std::size_t>((d * classes_ + k) * planes_ + x)];
     if (t < 0) fail(Status::bad_layer, std::string(kWhat) + ": no code for " + slot_name(d, k, x));
-    const std::uint32_t ranked = occupancy_order().occupancy[codes_[static_cast<std::size_t>(t)].decode(in_)];
-    unsigned occ = 0;
-    for (std::size_t r = 0; r < 8; ++r) occ |= ((ranked >> r) & 1u) << order[r];
+    const unsigned occ = occupancy_of(order, codes_[static_cast<std::size_t>(t)].decode(in_));
     if (d + 1 == q_) {
       if (occ & mask) fail(Status::bad_layer, std::string(kWhat) + ": an added point coincides with a coarse point");
       for (std::uint64_t c = 0; c < 8; ++c)
