@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x0e"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x0f"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -385,10 +385,11 @@ def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None):
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
 
-def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None):
+def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None, fit=None):
     """§8A.1 conditional octree coder (planes = 2: coder 2, §8A.3, with the
     plane context; gap not None: coder 3, §8A.4, with that weight and planes
-    1 or 2, or, a list of q weights, coder 4, §8A.5), written from the
+    1 or 2, or, a list of q weights, coder 4, §8A.5; fit not None: coder 5,
+    §8A.6, with that F and gap one weight or a list), written from the
     decoder's ranking (refdec.child_order).
     coarse: C in canonical order; added: A."""
     coarse = sorted(coarse)
@@ -410,7 +411,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
         m = sum(1 << c for c in range(8) if kids[c] in occ[d + 1])
         j = min(bin(m).count("1"), classes - 1)
         g = gap[d] if isinstance(gap, list) else gap or 0
-        pi, split = refdec.child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=g)
+        pi, split = refdec.child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=g, fit=fit or 0)
         x = 1 if planes == 2 and split >= 2 else 0
         rho = sum(1 << r for r in range(8) if kids[pi[r]] in aocc[d + 1])
         seq.append((d, (j, x), refdec.E.index(rho)))
@@ -423,7 +424,13 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     bw = BitWriter()
     bw.put(neighbours, 4)
     bw.put(classes - 1, 2)
-    if gap is not None:
+    if fit is not None:
+        bw.put(planes - 1, 1)
+        bw.put(fit, 4)
+        bw.put(1 if isinstance(gap, list) else 0, 1)
+        for g in (gap if isinstance(gap, list) else [gap or 0]):
+            bw.put(g, 4)
+    elif gap is not None:
         bw.put(planes - 1, 1)
         for g in (gap if isinstance(gap, list) else [gap]):
             bw.put(g, 4)
@@ -458,7 +465,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
                 current[(d, j)] = current[(d - 1, j)]
     for (d, j, s) in seq:
         current[(d, j)].put(bw, s)
-    coder = 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
+    coder = 5 if fit is not None else 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
     return bytes([coder]) + bw.bytes()
 
 
@@ -1019,7 +1026,8 @@ def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), 
         nb, cl, share = refn_opts[i - 1][:3]
         planes = refn_opts[i - 1][3] if len(refn_opts[i - 1]) > 3 else 1
         gap = refn_opts[i - 1][4] if len(refn_opts[i - 1]) > 4 else None
-        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes, gap=gap)])
+        fit = refn_opts[i - 1][5] if len(refn_opts[i - 1]) > 5 else None
+        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes, gap=gap, fit=fit)])
         if rcons:
             ch.append(["RCON", rcons[i]])
     ch.append(["HEND", b""])
@@ -1171,6 +1179,23 @@ def hb_refn_depth_gaps():
     lv = nested(pts, [90, 250, 380, 450], 92)
     return hand_stream(0, 10, lv, [(4, 3, True, 2, [0, 15, 1, 7, 3, 12, 2, 9, 4, 1]), (4, 2, True, 1, [5] * 10),
                                    (1, 1, True, 2, [8, 0, 8, 0, 8, 0, 8, 0, 8, 0])])
+
+
+def hb_refn_quadric():
+    # REFN coder 5 (quadric ranking). On a sphere: F = 10 with G = 6, plane
+    # contexts, 3 classes; F = 15 with a weight per depth, 2 classes,
+    # unshared tables; F = 5 (below 6: no quadric, the ranking of coder 4);
+    # neighbours 1 with F = 8 (no plane normal, so no quadric). On a lattice,
+    # whose points lie on few planes and conics (fits that fail, equal keys):
+    # F = 10 and F = 6 with neighbours 4.
+    pts = sphere_pts(500, 10, 101)
+    lv = nested(pts, [70, 180, 300, 420, 500], 102)
+    a = hand_stream(0, 10, lv, [(4, 3, True, 2, 6, 10), (4, 2, False, 1, [0, 1, 2, 3, 4, 6, 8, 12, 15, 5], 15),
+                                (4, 2, True, 2, 3, 5), (1, 1, True, 1, 9, 8)])
+    grid = lattice_pts(6, 3, (2, 1, 3)) + rand_pts(40, 6, 103)
+    lv = nested(sorted(set(grid)), [60, 150, 256], 104)
+    b = hand_stream(0, 6, lv, [(4, 2, True, 2, 2, 10), (4, 1, True, 1, [0, 4, 8, 1, 0, 2], 6)])
+    return a, b
 
 
 def hb_base_gaps():
@@ -1350,6 +1375,10 @@ HANDBUILT = [
      "REFN coder 3 (gap ranking): neighbours 4 with G = 6, plane contexts, 4 classes; G = 15 without plane contexts, 2 classes, unshared tables; neighbours 1 with G = 9 (no plane, the order of 8A.1); neighbours 15 with G = 1", sec("refn", "huff")),
     ("refn-depth-gaps", hb_refn_depth_gaps, P,
      "REFN coder 4 (a gap weight per depth): neighbours 4 with weights 0-15 varying by depth, plane contexts, 3 classes; the same weight 5 at every depth without plane contexts; neighbours 1 with alternating weights (no plane: the order of 8A.1)", sec("refn", "huff")),
+    ("refn-quadric", lambda: hb_refn_quadric()[0], P,
+     "REFN coder 5 (quadric ranking) on a sphere: F = 10 with G = 6, plane contexts, 3 classes; F = 15 with a weight per depth, 2 classes, unshared tables; F = 5 (no quadric: coder 4's ranking); neighbours 1 with F = 8 (no plane normal, no quadric)", sec("refn", "huff")),
+    ("refn-quadric-lattice", lambda: hb_refn_quadric()[1], P,
+     "REFN coder 5 on lattice points plus random ones: F = 10 and 6 with neighbours 4, fits that fail (points on few planes and conics) and equal keys", sec("refn", "huff")),
     ("base-gaps", lambda: hb_base_gaps()[0], P,
      "BASE coder 2 (gap weights): points near a sphere on a lattice (ties), neighbours 10, depth 0 plain, weights 15, 3 and 8 at the ranked depths, 3 contexts", sec("base", "huff")),
     ("base-gaps-neighbours-1", lambda: hb_base_gaps()[1], P,
@@ -1604,8 +1633,10 @@ NEGATIVE = [
      lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
     ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
-    ("neg-refn-coder", "bad_layer", P, "REFN coder 5", ["8A", "13"],
-     lambda: stream_q1_refn(b"\x05" + refn_single(0)[1:])),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 6", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x06" + refn_single(0)[1:])),
+    ("neg-refn-quadric-cut", "bad_layer", P, "REFN coder 5 whose payload ends inside the fit field (one data byte: neighbours, classes, planes and one bit of F)", ["8A.6", "13"],
+     lambda: stream_q1_refn(b"\x05" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1))))),
     ("neg-refn-depth-gaps-cut", "bad_layer", P, "REFN coder 4 at q = 1 whose payload ends inside the weight of depth 0 (one data byte: neighbours, classes, planes and one bit of G_0)", ["8A.5", "13"],
      lambda: stream_q1_refn(b"\x04" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1))))),
     ("neg-refn-gap-header-cut", "bad_layer", P, "REFN coder 3 whose payload ends inside the gap field (one data byte: neighbours, classes, planes and one bit of G)", ["8A.4", "13"],

@@ -391,17 +391,80 @@ def ring(cx, cy, cz, r):
                 yield (cx + dx, cy + dy, cz + r)
 
 
-def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, gap_from=0):
+def quadric_keys(n, j, O, F, h, k):
+    """§8A.6: the keys t'_c of the eight children from the quadric fitted
+    to the fit points F (doubled coordinates), or None when the fit fails.
+    Python floats are IEEE binary64; each operation below is rounded on its
+    own, in the spec's order."""
+    a, b = [x for x in range(3) if x != j]
+
+    def cross(axis):  # e_axis x n
+        c = [0, 0, 0]
+        c[(axis + 1) % 3] = -n[(axis + 2) % 3]
+        c[(axis + 2) % 3] = n[(axis + 1) % 3]
+        return c
+
+    T, B = cross(a), cross(b)
+
+    def frame(D):
+        return tuple(float(D[0] * V[0] + D[1] * V[1] + D[2] * V[2]) for V in (T, B, n))
+
+    M = [[0.0] * 6 for _ in range(6)]
+    R = [0.0] * 6
+    for p in F:
+        u, v, w = frame([p[0] - O[0], p[1] - O[1], p[2] - O[2]])
+        beta = (1.0, u, v, u * u, u * v, v * v)
+        for r in range(6):
+            for s in range(r, 6):
+                M[r][s] = M[r][s] + beta[r] * beta[s]
+            R[r] = R[r] + beta[r] * w
+    L = [[0.0] * 6 for _ in range(6)]
+    D = [0.0] * 6
+    for r in range(6):
+        acc = M[r][r]
+        for s in range(r):
+            acc = acc - L[r][s] * L[r][s] * D[s]
+        if not acc > M[r][r] * 2.0 ** -40:
+            return None
+        D[r] = acc
+        for z in range(r + 1, 6):
+            e = M[r][z]
+            for s in range(r):
+                e = e - L[z][s] * L[r][s] * D[s]
+            L[z][r] = e / D[r]
+    y = [0.0] * 6
+    for r in range(6):
+        y[r] = R[r]
+        for s in range(r):
+            y[r] = y[r] - L[r][s] * y[s]
+    c = [0.0] * 6
+    for r in range(5, -1, -1):
+        c[r] = y[r] / D[r]
+        for z in range(r + 1, 6):
+            c[r] = c[r] - L[z][r] * c[z]
+    keys = []
+    for child in range(8):
+        bits = (child >> 2, (child >> 1) & 1, child & 1)
+        u, v, w = frame([(h if bit else -h) // 2 for bit in bits])
+        f = c[0] + c[1] * u + c[2] * v + c[3] * (u * u) + c[4] * (u * v) + c[5] * (v * v)
+        x = abs(w - f) * float(k)
+        keys.append(int(x) if x < 2.0 ** 47 else 1 << 47)
+    return keys
+
+
+def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, gap_from=0, fit=0):
     """§8A.1 ranking: returns pi, pi[r] = child at rank r (and, with
     want_split, how many children lie on the plane's smaller side, §8.2).
     gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1. gap_from:
-    the distances g skip the first gap_from neighbours (§8.3: the node itself)."""
+    the distances g skip the first gap_from neighbours (§8.3: the node itself).
+    fit: coder 5's F (§8A.6), the points the quadric is fitted to."""
     X, Y, Z = node
     h = 1 << (q - d)
     O = (2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h)
     k = min(neighbours, len(coarse))
-    idx = nb.nearest(O, k)
-    P = [nb.pts[i] for i in idx]
+    f = min(fit, len(coarse))
+    idx = nb.nearest(O, max(k, f))
+    P = [nb.pts[i] for i in idx[:k]]
     S = [sum(p[a] for p in P) for a in range(3)]
 
     def mom(a, b):
@@ -425,6 +488,9 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
             j = a
     n = reduce_bits([A[0][j], A[1][j], A[2][j]], 20)
     N = n[0] * n[0] + n[1] * n[1] + n[2] * n[2]
+    quadric = None
+    if f >= 6 and n[j] > 0:
+        quadric = quadric_keys(n, j, O, [nb.pts[i] for i in idx[:f]], h, k)
     keys = []
     above = below = 0
     for c in range(8):
@@ -435,11 +501,12 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
         above += dot > 0
         below += dot < 0
         e = V[0] * V[0] + V[1] * V[1] + V[2] * V[2]
+        t = abs(dot) if quadric is None else quadric[c]  # §8A.6: the height above the quadric
         # §8A.4: kappa = 32 t^2 - G k^2 N g, g the squared distance from U to
         # the nearest neighbour (0 without neighbours)
         g = min((sum((U[a] - p[a]) ** 2 for a in range(3)) for p in P[gap_from:]), default=0)
-        kappa = 32 * dot * dot - gap * k * k * N * g
-        keys.append((1 - (m >> c & 1), kappa, abs(dot), e, c))
+        kappa = 32 * t * t - gap * k * k * N * g
+        keys.append((1 - (m >> c & 1), kappa, t, e, c))
     keys.sort()
     pi = [key[4] for key in keys]
     return (pi, min(above, below)) if want_split else pi
@@ -452,16 +519,22 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
         return decode_vq(payload, q, coarse, n, codebook, form)
-    if payload[0] not in (0, 2, 3, 4):
+    if payload[0] not in (0, 2, 3, 4, 5):
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     planes = 2 if payload[0] == 2 else 1  # §8A.3: coder 2 adds the plane context
     br = BitReader(payload, 1, "bad_layer", "REFN")
     neighbours = br.bits(4)
     classes = br.bits(2) + 1
     gaps = [0] * q
-    if payload[0] in (3, 4):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
+    fit = 0
+    if payload[0] in (3, 4, 5):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
         planes = br.bits(1) + 1
-        gaps = [br.bits(4)] * q if payload[0] == 3 else [br.bits(4) for _ in range(q)]
+        if payload[0] == 5:  # §8A.6: the quadric's fit points, then one weight or one per depth
+            fit = br.bits(4)
+            per_depth = br.bits(1) == 1
+        else:
+            per_depth = payload[0] == 4
+        gaps = [br.bits(4) for _ in range(q)] if per_depth else [br.bits(4)] * q
     table = [[[None] * planes for _ in range(classes)] for _ in range(q)]
     for d in range(q):
         for j in range(classes):
@@ -487,7 +560,7 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
             if kids[c] in occ[d + 1]:
                 m |= 1 << c
         w = bin(m).count("1")
-        pi, split = child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=gaps[d])
+        pi, split = child_order(node, d, q, m, coarse, nb, neighbours, want_split=True, gap=gaps[d], fit=fit)
         x = 1 if planes == 2 and split >= 2 else 0
         T = table[d][min(w, classes - 1)][x]
         if T is None:

@@ -289,8 +289,8 @@ for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
         if len(coarse) > 64:
             continue
         common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
-        if refn[0][0] in (0, 2, 3, 4):  # the target's coder byte mod 4: 0 coder 0, 1 coder 2, 2 coder 3, 3 coder 4
-            coder = bytes([{0: 0, 2: 1, 3: 2, 4: 3}[refn[0][0]]])
+        if refn[0][0] in (0, 2, 3, 4, 5):  # the target's coder byte mod 5: 0 coder 0, 1 coder 2, 2 coder 3, 3 coder 4,
+            coder = bytes([{0: 0, 2: 1, 3: 2, 4: 3, 5: 4}[refn[0][0]]])  # 4 coder 5
             put("refine_layer", name, common + (n - 1).to_bytes(2, "little") + coder + refn[0][1:])
         else:
             vqtb = next(p for t, p in cs if t == "VQTB")

@@ -655,7 +655,7 @@ TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the small
       check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::planes, OctreeCoder::plain);
     }
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  REQUIRE((layer.coder == 0 || layer.coder == 2 || layer.coder == 3 || layer.coder == 4));
+  REQUIRE((layer.coder == 0 || layer.coder == 2 || layer.coder == 3 || layer.coder == 4 || layer.coder == 5));
   const auto plain = encode_refinement(s.coarse, s.added, q);
   CHECK(layer.bytes.size() <= plain.size());
   if (layer.coder == 0) CHECK(layer.bytes == plain);
@@ -684,20 +684,19 @@ TEST_CASE("gap ranking: children far from every neighbour move up among those eq
   CHECK(masked[1] == 6);
 }
 
-TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill the coarse level's gaps") {
-  const int q = 12;
-  // Evenly spread points on a sphere (random points, each kept unless a kept
-  // one lies within r: a scan's spacing), and as added points an independent
-  // set of their 6-nearest-neighbour graph, taken greedily in random order up
-  // to a quarter, as a level of the hierarchy removes: every neighbour of an
-  // added point is coarse, so added points lie in the coarse level's gaps.
-  const Points candidates = quantize(samples::random_sphere_points(12000, 29), q);
+namespace {
+
+// Points of `candidates` spread evenly (each kept unless a kept one lies
+// within r grid units: a scan's spacing), and as added points an independent
+// set of their 6-nearest-neighbour graph, taken greedily in random order up
+// to a quarter, as a level of the hierarchy removes: every neighbour of an
+// added point is coarse, so added points lie in the coarse level's gaps.
+Split level_split(const Points& candidates, std::int64_t r) {
   const auto dist2 = [](const GridPoint& a, const GridPoint& b) {
     std::int64_t d2 = 0;
     for (std::size_t i = 0; i < 3; ++i) d2 += (std::int64_t{a[i]} - b[i]) * (std::int64_t{a[i]} - b[i]);
     return d2;
   };
-  const std::int64_t r = 90;  // grid units: about 1,700 points kept
   Points pts;
   for (const GridPoint& c : candidates)
     if (std::none_of(pts.begin(), pts.end(), [&](const GridPoint& p) { return dist2(p, c) < r * r; }))
@@ -727,6 +726,29 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
   }
   const Split s = split_by(pts, [&](std::size_t i) { return added[i] != 0; });
   REQUIRE(s.added.size() > pts.size() / 6);
+  return s;
+}
+
+// The smallest layer the gap rankings give (coders 0, 2, 3 and 4, with the
+// encoder's 4 neighbours), over the header choices.
+std::size_t without_quadric(const Split& s, int q) {
+  std::size_t least = SIZE_MAX;
+  for (bool planes : {false, true})
+    for (int classes = 1; classes <= 4; ++classes)
+      for (int gap : {0, 1, 2, 3, 4, 6, 8, 12}) {
+        RefinementParams p = params(4, classes);
+        p.plane_contexts = planes;
+        p.gap = gap;
+        least = std::min(least, encode_refinement(s.coarse, s.added, q, p).size());
+      }
+  return least;
+}
+
+}  // namespace
+
+TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill the coarse level's gaps") {
+  const int q = 12;
+  const Split s = level_split(quantize(samples::random_sphere_points(12000, 29), q), 90);  // about 1,700 points
   for (int k : {0, 1, 4, 15})
     for (int gap : {1, 7, 15})
       for (bool planes : {false, true}) {
@@ -739,21 +761,28 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
         // Read as coder 2, the header's planes and gap fields become slot flags.
         check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::gap, OctreeCoder::planes);
       }
-  // The encoder's choice: coder 3 or 4, at least 2 % smaller than the best
-  // ranking without the gap term (coders 0 and 2, 4 neighbours).
+  // The best gap ranking (coder 3) is at least 2 % smaller than the best
+  // ranking without the gap term (coders 0 and 2, 4 neighbours); the
+  // encoder's choice, with a gap ranking (coder 3, 4, or 5 with its quadric),
+  // is no larger.
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  CHECK((layer.coder == 3 || layer.coder == 4));
-  std::size_t without = SIZE_MAX;
+  CHECK((layer.coder == 3 || layer.coder == 4 || layer.coder == 5));
+  std::size_t without = SIZE_MAX, gapped = SIZE_MAX;
   for (bool planes : {false, true})
-    for (int classes = 1; classes <= 4; ++classes) {
-      RefinementParams p = params(4, classes);
-      p.plane_contexts = planes;
-      without = std::min(without, encode_refinement(s.coarse, s.added, q, p).size());
-    }
+    for (int classes = 1; classes <= 4; ++classes)
+      for (int gap : {0, 1, 2, 3, 4, 6, 8, 12}) {
+        RefinementParams p = params(4, classes);
+        p.plane_contexts = planes;
+        p.gap = gap;
+        const std::size_t size = encode_refinement(s.coarse, s.added, q, p).size();
+        (gap == 0 ? without : gapped) = std::min(gap == 0 ? without : gapped, size);
+      }
   CAPTURE(without);
+  CAPTURE(gapped);
   CAPTURE(layer.bytes.size());
-  MESSAGE("gap ranking: ", layer.bytes.size(), " bytes, without: ", without, " (", s.added.size(), " added points)");
-  CHECK(50 * layer.bytes.size() <= 49 * without);
+  MESSAGE("gap ranking: ", gapped, " bytes, without: ", without, " (", s.added.size(), " added points)");
+  CHECK(50 * gapped <= 49 * without);
+  CHECK(layer.bytes.size() <= gapped);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
                           static_cast<OctreeCoder>(layer.coder)) == sorted(s.added));
 
@@ -848,4 +877,50 @@ TEST_CASE("the ranked base coder's lattice neighbour search equals a k-d tree's,
       }
     }
   }
+}
+
+TEST_CASE("coder 5 (quadric ranking) round trips, and wins where the surface curves within a few spacings") {
+  const int q = 12;
+  // A thin torus sampled about 6 points across its tube's radius: a plane
+  // through 4 neighbours misses the curve by a good part of the spacing.
+  const Split s = level_split(quantize(samples::torus(160, 60, 1.0, 0.2), q), 40);
+  CAPTURE(s.coarse.size());
+  CAPTURE(s.added.size());
+  for (int fit : {1, 5, 6, 10, 15})
+    for (int gap : {0, 3})
+      for (bool planes : {false, true}) {
+        CAPTURE(fit);
+        CAPTURE(gap);
+        CAPTURE(planes);
+        RefinementParams p = params(4, 2);
+        p.plane_contexts = planes;
+        p.gap = gap;
+        p.fit = fit;
+        // Read as coder 4, the fit and per-depth flag become weights.
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::quadric, OctreeCoder::depth_gaps);
+        p.depth_gaps = {0, 0, 0, 0, 0, 1, 2, 4, 2, 1, 0, 0};
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::quadric, OctreeCoder::depth_gaps);
+      }
+  // Below 6 neighbours there is no quadric: the symbols of coder 3, so the
+  // same layer but for coder 5's longer header (6 bits more, at most one
+  // byte), whatever the fit.
+  RefinementParams three = params(4, 2);
+  three.gap = 3;
+  RefinementParams five = three;
+  five.fit = 5;
+  const auto b3 = encode_refinement(s.coarse, s.added, q, three), b5 = encode_refinement(s.coarse, s.added, q, five);
+  five.fit = 1;
+  CHECK(encode_refinement(s.coarse, s.added, q, five) != b5);  // the header differs
+  CHECK(b5.size() <= b3.size() + 1);
+  CHECK(b5.size() >= b3.size());
+  // The encoder's choice: coder 5, at least 3 % smaller than every ranking
+  // without the quadric.
+  const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
+  const std::size_t without = without_quadric(s, q);
+  MESSAGE("quadric ranking: ", layer.bytes.size(), " bytes, without: ", without, " (", s.added.size(),
+          " added points)");
+  CHECK(layer.coder == 5);
+  CHECK(100 * layer.bytes.size() <= 97 * without);
+  CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                          OctreeCoder::quadric) == sorted(s.added));
 }

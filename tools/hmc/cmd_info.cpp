@@ -18,6 +18,7 @@ const char* refinement_coder_name(int coder) {
     case 2: return "conditional octree, plane contexts";
     case 3: return "conditional octree, gap ranking";
     case 4: return "conditional octree, gap ranking per depth";
+    case 5: return "conditional octree, quadric ranking";
     default: return "unknown";
   }
 }

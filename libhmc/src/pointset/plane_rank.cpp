@@ -2,6 +2,7 @@
 #include "pointset/plane_rank.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <numeric>
 
@@ -44,10 +45,81 @@ void reduce(std::array<std::int64_t, N>& v, int bits) {
   for (std::int64_t& x : v) x = x < 0 ? -((-x) >> s) : x >> s;
 }
 
+// Coordinates of a point relative to the node's centre in the frame of
+// spec 8A.6: u and v along e_a x n and e_b x n (a < b the axes other than
+// the normal's dominant axis j), both perpendicular to n, and the height w
+// along n itself. Exact integers (below 2^46 in magnitude), so exact doubles.
+struct Frame {
+  std::array<std::int64_t, 3> t, b, n;
+  std::array<double, 3> of(const std::array<std::int64_t, 3>& delta) const {
+    auto dot = [&](const std::array<std::int64_t, 3>& x) {
+      return static_cast<double>(delta[0] * x[0] + delta[1] * x[1] + delta[2] * x[2]);
+    };
+    return {dot(t), dot(b), dot(n)};
+  }
+};
+
+Frame frame_of(const std::array<std::int64_t, 3>& n, std::size_t j) {
+  const std::size_t a = j == 0 ? 1 : 0, b = j == 2 ? 1 : 2;
+  // e_x x n = (0, -n_z, n_y), e_y x n = (n_z, 0, -n_x), e_z x n = (-n_y, n_x, 0).
+  auto cross = [&](std::size_t axis) {
+    std::array<std::int64_t, 3> c{0, 0, 0};
+    c[(axis + 1) % 3] = -n[(axis + 2) % 3];
+    c[(axis + 2) % 3] = n[(axis + 1) % 3];
+    return c;
+  };
+  return {cross(a), cross(b), n};
+}
+
+// The quadric of spec 8A.6 through the points neighbours[0 .. f): the height
+// w as c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2 by least squares, in
+// binary64 and in the operation order the spec writes (the build sets
+// -ffp-contract=off: no fused multiply-add). False when the normal equations
+// are (nearly) singular: a pivot of their L D L^T factorization is at most
+// 2^-40 times its diagonal entry.
+bool fit_quadric(const Doubled* neighbours, int f, const std::array<std::int64_t, 3>& o, const Frame& frame,
+                 std::array<double, 6>& coef) {
+  double m[6][6] = {}, r[6] = {};
+  for (int i = 0; i < f; ++i) {
+    const auto p = frame.of({neighbours[i][0] - o[0], neighbours[i][1] - o[1], neighbours[i][2] - o[2]});
+    const double u = p[0], v = p[1], w = p[2];
+    const double beta[6] = {1.0, u, v, u * u, u * v, v * v};
+    for (std::size_t x = 0; x < 6; ++x) {
+      for (std::size_t y = x; y < 6; ++y) m[x][y] = m[x][y] + beta[x] * beta[y];
+      r[x] = r[x] + beta[x] * w;
+    }
+  }
+  // m = L D L^T, L unit lower triangular (l[z][x], x < z).
+  double l[6][6] = {}, dg[6] = {};
+  for (std::size_t x = 0; x < 6; ++x) {
+    double acc = m[x][x];
+    for (std::size_t y = 0; y < x; ++y) acc = acc - l[x][y] * l[x][y] * dg[y];
+    if (!(acc > m[x][x] * 0x1p-40)) return false;
+    dg[x] = acc;
+    for (std::size_t z = x + 1; z < 6; ++z) {
+      double e = m[x][z];
+      for (std::size_t y = 0; y < x; ++y) e = e - l[z][y] * l[x][y] * dg[y];
+      l[z][x] = e / dg[x];
+    }
+  }
+  double y[6];
+  for (std::size_t x = 0; x < 6; ++x) {
+    double acc = r[x];
+    for (std::size_t z = 0; z < x; ++z) acc = acc - l[x][z] * y[z];
+    y[x] = acc;
+  }
+  for (std::size_t x = 6; x-- > 0;) {
+    double acc = y[x] / dg[x];
+    for (std::size_t z = x + 1; z < 6; ++z) acc = acc - l[z][x] * coef[z];
+    coef[x] = acc;
+  }
+  return true;
+}
+
 }  // namespace
 
 ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, bool with_gaps,
-                     int gap_from) {
+                     int gap_from, int fit) {
   const std::int64_t h = std::int64_t{1} << (q - d);  // node side
   std::array<std::int64_t, 3> s{0, 0, 0};
   std::array<std::int64_t, 6> ss{};  // xx yy zz xy xz yz
@@ -89,6 +161,25 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
     below += dot < 0;
   }
   split_ = std::min(above, below);
+  // The quadric keys (spec 8A.6): t_c = k |w_c - quadric(u_c, v_c)|, the
+  // child's height above the quadric in the plane key's units (w is |n|
+  // times a distance along the normal), truncated, at most 2^47.
+  const std::array<std::int64_t, 3> o{2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h,
+                                      2 * std::int64_t{p[2]} * h + h};
+  const Frame frame = frame_of(n, j);
+  std::array<double, 6> coef{};
+  if (fit >= 6 && n[j] > 0 && fit_quadric(neighbours, fit, o, frame, coef)) {
+    for (std::size_t c = 0; c < 8; ++c) {
+      std::array<std::int64_t, 3> delta{};
+      for (std::size_t a = 0; a < 3; ++a) delta[a] = (((c >> (2 - a)) & 1) != 0 ? h : -h) / 2;
+      const auto x = frame.of(delta);
+      const double u = x[0], v = x[1];
+      const double fitted = coef[0] + coef[1] * u + coef[2] * v + coef[3] * (u * u) + coef[4] * (u * v) +
+                            coef[5] * (v * v);
+      const double key = std::fabs(x[2] - fitted) * static_cast<double>(k);
+      t_[c] = key < 0x1p47 ? static_cast<std::int64_t>(key) : std::int64_t{1} << 47;
+    }
+  }
   // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
   // the squared distance from the child's centre to its nearest neighbour.
   // t_c / (k |n|) is the child's distance to the plane, so both terms are

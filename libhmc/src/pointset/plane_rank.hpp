@@ -51,8 +51,13 @@ using Doubled = std::array<std::int32_t, 3>;
 class ChildKeys {
  public:
   /// `gap_from`: the distances to the nearest neighbour skip the first
-  /// gap_from neighbours (the base coder's node itself, spec 8.3).
-  ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps, int gap_from = 0);
+  /// gap_from neighbours (the base coder's node itself, spec 8.3). `fit`
+  /// (spec 8A.6): when 6 or more, the plane distances give way to distances
+  /// from the quadric fitted to the first `fit` neighbours (where that fit
+  /// is well posed); `neighbours` then holds max(k, fit) points, of which
+  /// the plane and the gaps use the first k.
+  ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps, int gap_from = 0,
+            int fit = 0);
   /// How many children lie on the smaller side of the fitted plane (0 to 4).
   int split() const { return split_; }
   /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;

@@ -18,6 +18,7 @@ namespace hmc::detail {
 namespace {
 
 constexpr int kMaxNeighbours = 15;        // 4-bit header field
+constexpr int kQuadricNeighbours = 10;       // the encoder's quadric fit (coder 5)
 constexpr int kMaxClasses = 4;            // 2-bit header field
 constexpr int kMaxGap = 15;               // 4-bit header field of coder 3
 constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
@@ -163,8 +164,12 @@ class CoarseLevel {
   }
 
   std::uint32_t size() const { return static_cast<std::uint32_t>(keys_.size()); }
-  /// K, the number of neighbours that predict a node's children.
-  void set_neighbours(int k) { neighbours_ = k; }
+  /// K, the number of neighbours that predict a node's children, and F, the
+  /// number the quadric is fitted to (coder 5; below 6: no quadric).
+  void set_neighbours(int k, int fit = 0) {
+    neighbours_ = k;
+    fit_ = fit;
+  }
   /// The gap weight of each depth's ranking (coders 3 and 4; 0: the plain
   /// ranking); `others`: last_keys() must also rank for other weights.
   void set_gaps(const std::vector<int>& gaps, bool others = false) {
@@ -198,11 +203,11 @@ class CoarseLevel {
     const GridPoint p = morton_point(key, d);
     const std::int64_t h = std::int64_t{1} << (q_ - d);  // node side
     const Vec centre{2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h, 2 * std::int64_t{p[2]} * h + h};
-    int k = 0;
-    const Candidates* handed = neighbours(centre, inherited, fresh, k);
+    int found = 0;
+    const Candidates* handed = neighbours(centre, inherited, fresh, found);
     std::array<Point32, kMaxNeighbours> nb{};
-    for (int i = 0; i < k; ++i) nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
-    last_ = ChildKeys(p, d, q_, nb.data(), k, with_gaps_);
+    for (int i = 0; i < found; ++i) nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
+    last_ = ChildKeys(p, d, q_, nb.data(), std::min(found, neighbours_), with_gaps_, 0, std::min(found, fit_));
     last_.order(coarse_mask, gaps_[static_cast<std::size_t>(d)], order);
     if (split) *split = last_.split();
     return handed;
@@ -211,12 +216,12 @@ class CoarseLevel {
  private:
   static constexpr double kInfinity = 1e300;
 
-  // Fills hits_ with the k nearest coarse points to `centre`. They come from
+  // Fills hits_ with the max(K, F) nearest coarse points to `centre`. They come from
   // the inherited candidates when these provably hold them (deep nodes move
   // little from their parent), else from a search that keeps a few spare
   // points for the node's descendants. Only speed depends on the candidates.
   const Candidates* neighbours(const Vec& centre, const Candidates* inherited, Candidates& fresh, int& count) {
-    const int k = neighbours_;
+    const int k = std::max(neighbours_, fit_);
     count = 0;
     if (k == 0) return nullptr;
     if (inherited) {
@@ -244,7 +249,7 @@ class CoarseLevel {
   }
 
   int q_;
-  int neighbours_ = 0;
+  int neighbours_ = 0, fit_ = 0;
   std::vector<int> gaps_ = std::vector<int>(static_cast<std::size_t>(q_), 0);
   bool with_gaps_ = false;
   ChildKeys last_{{0, 0, 0}, 0, 1, nullptr, 0, false};
@@ -358,35 +363,46 @@ std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
 struct TablePlan {
   int classes = 1, planes = 1;
   std::vector<int> gaps;  // per depth: all 0 coder 0 or 2, all equal coder 3, else coder 4
+  int fit = 0;            // coder 5 when above 0: the quadric's neighbours
   std::vector<bool> fresh;                       // [slot]: a table is sent
   std::vector<int> table;                        // [slot]: the table used, -1 for none
   std::vector<std::vector<std::uint64_t>> freq;  // per table
   std::uint64_t bits = 0;                        // header, tables and symbols
 };
 
-// The coder of a plan, from its gap weights.
+// Whether the depths' gap weights differ (coder 4, or coder 5's per-depth form).
+bool per_depth(const std::vector<int>& gaps) {
+  return std::any_of(gaps.begin(), gaps.end(), [&](int g) { return g != gaps[0]; });
+}
+
+// The coder of a plan, from its quadric and gap weights.
 OctreeCoder coder_of(const TablePlan& p) {
+  if (p.fit > 0) return OctreeCoder::quadric;
   if (std::all_of(p.gaps.begin(), p.gaps.end(), [](int g) { return g == 0; }))
     return p.planes == 2 ? OctreeCoder::planes : OctreeCoder::plain;
-  return std::all_of(p.gaps.begin(), p.gaps.end(), [&](int g) { return g == p.gaps[0]; }) ? OctreeCoder::gap
-                                                                                              : OctreeCoder::depth_gaps;
+  return per_depth(p.gaps) ? OctreeCoder::depth_gaps : OctreeCoder::gap;
 }
 
 // freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
 // nodes with w children holding coarse points and plane context x.
 TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes,
-                      const std::vector<int>& gaps) {
+                      const std::vector<int>& gaps, int fit) {
   TablePlan plan;
   plan.classes = classes;
   plan.planes = planes;
   plan.gaps = gaps;
+  plan.fit = fit;
   const auto slots = static_cast<std::size_t>(q * classes * planes);
   plan.fresh.assign(slots, false);
   plan.table.assign(slots, -1);
   // Header fields (neighbours, classes; coders 3 and 4: planes and the
-  // weights), then one flag per slot.
+  // weights; coder 5: planes, fit, and one weight or one per depth), then
+  // one flag per slot.
   const OctreeCoder coder = coder_of(plan);
-  plan.bits = 6 + slots + (coder == OctreeCoder::gap ? 5 : coder == OctreeCoder::depth_gaps ? 1 + 4 * q : 0);
+  plan.bits = 6 + slots + (coder == OctreeCoder::gap          ? 5
+                           : coder == OctreeCoder::depth_gaps ? 1 + 4 * q
+                           : coder == OctreeCoder::quadric    ? 6 + (per_depth(gaps) ? 4 * q : 4)
+                                                              : 0);
   std::vector<std::uint64_t> f(kAlphabet);
   for (int k = 0; k < classes; ++k)
     for (int x = 0; x < planes; ++x) {
@@ -444,6 +460,14 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
     if (coder == OctreeCoder::gap) w.put(static_cast<std::uint32_t>(plan.gaps[0]), 4);
     else
       for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), 4);
+  } else if (coder == OctreeCoder::quadric) {
+    w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
+    w.put(static_cast<std::uint32_t>(plan.fit), 4);
+    const bool varies = per_depth(plan.gaps);
+    w.put(varies ? 1u : 0u, 1);
+    if (!varies) w.put(static_cast<std::uint32_t>(plan.gaps[0]), 4);
+    else
+      for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), 4);
   }
   for (std::size_t slot = 0; slot < plan.fresh.size(); ++slot) {
     w.put(plan.fresh[slot] ? 1u : 0u, 1);
@@ -476,7 +500,8 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   if (added_in.size() >= (std::size_t{1} << 32) - 1)
     fail(Status::invalid_argument, std::string(kWhat) + ": too many added points");
   if (forced && (forced->neighbours < 0 || forced->neighbours > kMaxNeighbours || forced->classes < 1 ||
-                 forced->classes > kMaxClasses || forced->gap < 0 || forced->gap > kMaxGap ||
+                 forced->classes > kMaxClasses || forced->gap < 0 || forced->gap > kMaxGap || forced->fit < 0 ||
+                 forced->fit > kMaxNeighbours ||
                  (!forced->depth_gaps.empty() && forced->depth_gaps.size() != static_cast<std::size_t>(q)) ||
                  std::any_of(forced->depth_gaps.begin(), forced->depth_gaps.end(),
                              [](int g) { return g < 0 || g > kMaxGap; })))
@@ -486,6 +511,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     TablePlan p;
     p.planes = forced->plane_contexts ? 2 : 1;
     p.gaps = gaps_of(*forced, q);
+    p.fit = forced->fit;
     return {static_cast<std::uint8_t>(coder_of(p)), {}};
   }
 
@@ -509,12 +535,12 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   // the best is written. On a tie the earlier one stays (fewer tables, no
   // weights).
   const auto bytes_of = [](const TablePlan& p) { return (p.bits + 7) / 8; };
-  const auto plan_of = [&](const std::vector<std::uint64_t>& freq, const std::vector<int>& gaps) {
+  const auto plan_of = [&](const std::vector<std::uint64_t>& freq, const std::vector<int>& gaps, int fit) {
     std::optional<TablePlan> plan;
     for (int planes : plane_choices)
       for (int classes = 1; classes <= kMaxClasses; ++classes) {
         if (forced && classes != forced->classes) continue;
-        TablePlan p = plan_tables(freq, q, classes, planes, gaps);
+        TablePlan p = plan_tables(freq, q, classes, planes, gaps, fit);
         if (!plan || bytes_of(p) < bytes_of(*plan) || (bytes_of(p) == bytes_of(*plan) && planes == plan->planes &&
                                                         p.bits < plan->bits))
           plan = std::move(p);
@@ -533,17 +559,17 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   // weight at all depths (coder 3), and for each depth's best weight (coder
   // 4), are compared without symbols; a better ranking is then traversed
   // again for its symbols.
-  const auto trial = [&](int neighbours, const std::vector<int>& gaps, const std::vector<int>& others) {
-    level.set_neighbours(neighbours);
+  const auto trial = [&](int neighbours, int fit, const std::vector<int>& gaps, const std::vector<int>& others) {
+    level.set_neighbours(neighbours, fit);
     level.set_gaps(gaps, !others.empty());
     Traversal traversal(level, added, q, others);
     std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * depth_rows, 0);
     for (const Symbol& s : traversal.symbols)
       ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
-    TablePlan plan = plan_of(freq, gaps);
+    TablePlan plan = plan_of(freq, gaps, fit);
     bool better = false;
     for (std::size_t j = 0; j < others.size(); ++j) {
-      TablePlan p = plan_of(traversal.counts[j], std::vector<int>(static_cast<std::size_t>(q), others[j]));
+      TablePlan p = plan_of(traversal.counts[j], std::vector<int>(static_cast<std::size_t>(q), others[j]), fit);
       if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
     }
     if (!others.empty()) {
@@ -567,7 +593,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
                         mixed_freq.begin() + static_cast<std::ptrdiff_t>(at));
           }
       }
-      TablePlan p = plan_of(mixed_freq, mixed);
+      TablePlan p = plan_of(mixed_freq, mixed, fit);
       if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
     }
     if (!best || bytes_of(plan) < bytes_of(best->plan)) {
@@ -580,15 +606,17 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   };
   const std::vector<int> none(static_cast<std::size_t>(q), 0);
   if (forced) {
-    trial(forced->neighbours, gaps_of(*forced, q), {});
+    trial(forced->neighbours, forced->fit, gaps_of(*forced, q), {});
   } else {
     // The plane through 4 neighbours suits surfaces; the nearest point alone
     // suits volume interiors. With 4 neighbours (and all coders allowed),
-    // coder 3's and 4's gap weights 1 to 12 are tried too.
+    // coder 3's and 4's gap weights 1 to 12 are tried too, and then coder 5's
+    // quadric through 10 neighbours, with the same weights.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
     const std::vector<int> weights{1, 2, 3, 4, 6, 8, 12};
-    trial(neighbours, none, all_coders && neighbours >= 2 ? weights : std::vector<int>{});
-    if (neighbours != 1) trial(1, none, {});
+    trial(neighbours, 0, none, all_coders && neighbours >= 2 ? weights : std::vector<int>{});
+    if (all_coders && coarse.size() >= 6) trial(neighbours, kQuadricNeighbours, none, weights);
+    if (neighbours != 1) trial(1, 0, none, {});
   }
   return {static_cast<std::uint8_t>(coder_of(best->plan)), write_layer(best->symbols, best->plan, best->neighbours)};
 }
@@ -603,9 +631,12 @@ class Decoder {
     neighbours_ = static_cast<int>(in.get(4));
     classes_ = static_cast<int>(in.get(2)) + 1;
     std::vector<int> gaps(static_cast<std::size_t>(q), 0);
-    if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps) {
+    int fit = 0;
+    if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric) {
       planes_ = static_cast<int>(in.get(1)) + 1;
-      if (coder == OctreeCoder::gap) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(4)));
+      if (coder == OctreeCoder::quadric) fit = static_cast<int>(in.get(4));
+      const bool varies = coder == OctreeCoder::depth_gaps || (coder == OctreeCoder::quadric && in.get(1) != 0);
+      if (!varies) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(4)));
       else
         for (int& g : gaps) g = static_cast<int>(in.get(4));
     }
@@ -623,7 +654,7 @@ class Decoder {
           }
         }
     level_.emplace(coarse, q);
-    level_->set_neighbours(neighbours_);
+    level_->set_neighbours(neighbours_, fit);
     level_->set_gaps(gaps);
     visit(0, 0, 0, level_->size(), nullptr);
   }

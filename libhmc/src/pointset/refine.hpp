@@ -16,15 +16,16 @@
 namespace hmc::detail {
 
 /// The exact REFN coders (spec 8A): the conditional octree (0), with plane
-/// contexts (2), with plane contexts and gap ranking (3), and with a gap
-/// weight per depth (4).
-enum class OctreeCoder : std::uint8_t { plain = 0, planes = 2, gap = 3, depth_gaps = 4 };
+/// contexts (2), with plane contexts and gap ranking (3), with a gap weight
+/// per depth (4), and with quadric ranking (5).
+enum class OctreeCoder : std::uint8_t { plain = 0, planes = 2, gap = 3, depth_gaps = 4, quadric = 5 };
 
 /// The header fields of a refinement layer: the number of coarse neighbours
 /// that predict where added points lie (0 to 15; 0 disables the prediction),
 /// the number of context classes (1 to 4), the plane contexts and the gap
-/// weights. The coder follows from them: 4 when the depths' weights differ,
-/// 3 when they are equal and above 0, else 2 with plane contexts, else 0.
+/// weights, and the quadric's neighbours. The coder follows from them: 5 with
+/// a quadric, else 4 when the depths' weights differ, 3 when they are equal
+/// and above 0, else 2 with plane contexts, else 0.
 struct RefinementParams {
   int neighbours = 4;
   int classes = 4;
@@ -37,10 +38,14 @@ struct RefinementParams {
   /// Coder 4 (spec 8A.5): when not empty, q weights (0 to 15), one per
   /// depth, in place of `gap`.
   std::vector<int> depth_gaps;
+  /// Coder 5 (spec 8A.6) when above 0, to 15: the children are ranked by
+  /// their distance from the quadric fitted to this many nearest coarse
+  /// points (none below 6), with the gap weights of coders 3 and 4.
+  int fit = 0;
 };
 
 /// A refinement layer as the encoder writes it: the REFN coder number (0,
-/// 2, 3 or 4, an OctreeCoder) and its bits.
+/// 2, 3, 4 or 5, an OctreeCoder) and its bits.
 struct RefinementLayer {
   std::uint8_t coder = 0;
   std::vector<std::uint8_t> bytes;
@@ -59,7 +64,7 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params);
 
-/// What the encoder writes: coder 0, 2, 3 or 4, whichever is smallest.
+/// What the encoder writes: coder 0, 2, 3, 4 or 5, whichever is smallest.
 RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                         int q);
 
