@@ -729,13 +729,14 @@ Split level_split(const Points& candidates, std::int64_t r) {
   return s;
 }
 
-// The smallest layer the gap rankings give (coders 0, 2, 3 and 4, with the
-// encoder's 4 neighbours), over the header choices.
-std::size_t without_quadric(const Split& s, int q) {
+// The smallest layer that coders 0, 2 and 3 give with the encoder's 4
+// neighbours and one of the gap weights `gaps` (0: no gap term), over the
+// other header choices.
+std::size_t smallest_layer(const Split& s, int q, const std::vector<int>& gaps) {
   std::size_t least = SIZE_MAX;
   for (bool planes : {false, true})
     for (int classes = 1; classes <= 4; ++classes)
-      for (int gap : {0, 1, 2, 3, 4, 6, 8, 12}) {
+      for (int gap : gaps) {
         RefinementParams p = params(4, classes);
         p.plane_contexts = planes;
         p.gap = gap;
@@ -767,16 +768,7 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
   // is no larger.
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
   CHECK((layer.coder == 3 || layer.coder == 4 || layer.coder == 5));
-  std::size_t without = SIZE_MAX, gapped = SIZE_MAX;
-  for (bool planes : {false, true})
-    for (int classes = 1; classes <= 4; ++classes)
-      for (int gap : {0, 1, 2, 3, 4, 6, 8, 12}) {
-        RefinementParams p = params(4, classes);
-        p.plane_contexts = planes;
-        p.gap = gap;
-        const std::size_t size = encode_refinement(s.coarse, s.added, q, p).size();
-        (gap == 0 ? without : gapped) = std::min(gap == 0 ? without : gapped, size);
-      }
+  const std::size_t without = smallest_layer(s, q, {0}), gapped = smallest_layer(s, q, {1, 2, 3, 4, 6, 8, 12});
   CAPTURE(without);
   CAPTURE(gapped);
   CAPTURE(layer.bytes.size());
@@ -914,9 +906,10 @@ TEST_CASE("coder 5 (quadric ranking) round trips, and wins where the surface cur
   CHECK(b5.size() <= b3.size() + 1);
   CHECK(b5.size() >= b3.size());
   // The encoder's choice: coder 5, at least 3 % smaller than every ranking
-  // without the quadric.
+  // without the quadric (a single weight; coder 4's per-depth weights
+  // aside).
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  const std::size_t without = without_quadric(s, q);
+  const std::size_t without = smallest_layer(s, q, {0, 1, 2, 3, 4, 6, 8, 12});
   MESSAGE("quadric ranking: ", layer.bytes.size(), " bytes, without: ", without, " (", s.added.size(),
           " added points)");
   CHECK(layer.coder == 5);
