@@ -1027,7 +1027,8 @@ def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), 
         planes = refn_opts[i - 1][3] if len(refn_opts[i - 1]) > 3 else 1
         gap = refn_opts[i - 1][4] if len(refn_opts[i - 1]) > 4 else None
         fit = refn_opts[i - 1][5] if len(refn_opts[i - 1]) > 5 else None
-        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes, gap=gap, fit=fit)])
+        ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes, gap=gap,
+                                        fit=fit)])
         if rcons:
             ch.append(["RCON", rcons[i]])
     ch.append(["HEND", b""])

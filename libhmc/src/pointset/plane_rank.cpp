@@ -164,11 +164,11 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   // The quadric keys (spec 8A.6): t_c = k |w_c - quadric(u_c, v_c)|, the
   // child's height above the quadric in the plane key's units (w is |n|
   // times a distance along the normal), truncated, at most 2^47.
-  const std::array<std::int64_t, 3> o{2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h,
-                                      2 * std::int64_t{p[2]} * h + h};
   const Frame frame = frame_of(n, j);
   std::array<double, 6> coef{};
-  if (fit >= 6 && n[j] > 0 && fit_quadric(neighbours, fit, o, frame, coef)) {
+  if (fit >= 6 && n[j] > 0 &&
+      fit_quadric(neighbours, fit, {2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h,
+                                    2 * std::int64_t{p[2]} * h + h}, frame, coef)) {
     for (std::size_t c = 0; c < 8; ++c) {
       std::array<std::int64_t, 3> delta{};
       for (std::size_t a = 0; a < 3; ++a) delta[a] = (((c >> (2 - a)) & 1) != 0 ? h : -h) / 2;

@@ -206,7 +206,8 @@ class CoarseLevel {
     int found = 0;
     const Candidates* handed = neighbours(centre, inherited, fresh, found);
     std::array<Point32, kMaxNeighbours> nb{};
-    for (int i = 0; i < found; ++i) nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
+    for (int i = 0; i < found; ++i)
+      nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
     last_ = ChildKeys(p, d, q_, nb.data(), std::min(found, neighbours_), with_gaps_, 0, std::min(found, fit_));
     last_.order(coarse_mask, gaps_[static_cast<std::size_t>(d)], order);
     if (split) *split = last_.split();
@@ -216,10 +217,11 @@ class CoarseLevel {
  private:
   static constexpr double kInfinity = 1e300;
 
-  // Fills hits_ with the max(K, F) nearest coarse points to `centre`. They come from
-  // the inherited candidates when these provably hold them (deep nodes move
-  // little from their parent), else from a search that keeps a few spare
-  // points for the node's descendants. Only speed depends on the candidates.
+  // Fills hits_ with the max(K, F) nearest coarse points to `centre`. They
+  // come from the inherited candidates when these provably hold them (deep
+  // nodes move little from their parent), else from a search that keeps a
+  // few spare points for the node's descendants. Only speed depends on the
+  // candidates.
   const Candidates* neighbours(const Vec& centre, const Candidates* inherited, Candidates& fresh, int& count) {
     const int k = std::max(neighbours_, fit_);
     count = 0;
