@@ -2,6 +2,7 @@
 // Bit I/O and canonical Huffman codes.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <functional>
 #include <random>
 
@@ -77,6 +78,42 @@ TEST_CASE("Huffman lengths are optimal on a textbook example") {
   CHECK(kraft_sum(len) == (1u << 15));
 }
 
+TEST_CASE("Huffman lengths cost what a Huffman tree costs when it is no deeper than 15") {
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::size_t n = 2 + rng() % 255;
+    std::vector<std::uint64_t> f(n);
+    for (auto& x : f) x = trial % 3 == 0 ? rng() % 4 : 1 + rng() % (trial % 3 == 1 ? 100 : 100000);
+    if (std::count_if(f.begin(), f.end(), [](std::uint64_t x) { return x != 0; }) < 2) f[0] = f[1] = 1;
+    // A Huffman tree's cost (the sum of its merges) and depth, by a min-heap.
+    std::vector<std::pair<std::uint64_t, int>> heap;  // (weight, depth)
+    for (auto x : f)
+      if (x) heap.push_back({x, 0});
+    const auto greater = [](const auto& a, const auto& b) { return a > b; };
+    std::make_heap(heap.begin(), heap.end(), greater);
+    std::uint64_t tree_cost = 0;
+    int depth = 0;
+    while (heap.size() > 1) {
+      std::pop_heap(heap.begin(), heap.end(), greater);
+      const auto a = heap.back();
+      heap.pop_back();
+      std::pop_heap(heap.begin(), heap.end(), greater);
+      const auto b = heap.back();
+      heap.pop_back();
+      tree_cost += a.first + b.first;
+      depth = std::max(a.second, b.second) + 1;
+      heap.push_back({a.first + b.first, depth});
+      std::push_heap(heap.begin(), heap.end(), greater);
+    }
+    const auto len = huffman_lengths(f);
+    std::uint64_t cost = 0;
+    for (std::size_t i = 0; i < n; ++i) cost += f[i] * len[i];
+    CHECK(kraft_sum(len) == (1u << 15));
+    if (depth <= 15) CHECK(cost == tree_cost);
+    else CHECK(cost >= tree_cost);
+  }
+}
+
 TEST_CASE("Huffman lengths respect the 15-bit limit and stay complete") {
   // Fibonacci frequencies force a depth of n-1 without a limit.
   std::vector<std::uint64_t> f{1, 1};
@@ -98,6 +135,7 @@ TEST_CASE("a single used symbol costs no bits") {
   const auto table_bits = w.bit_count();
   for (int i = 0; i < 1000; ++i) code.encode(w, 77);
   CHECK(w.bit_count() == table_bits);
+  CHECK(coded_bits(f) == table_bits);
   auto bytes = w.finish();
   BitReader r(bytes.data(), bytes.size(), "t");
   auto back = HuffmanCode::read(r, 256, "t");
@@ -123,6 +161,7 @@ TEST_CASE("Huffman tables and symbols round trip for many distributions") {
     BitWriter w;
     code.write(w, form);
     for (auto s : msg) code.encode(w, s);
+    CHECK(coded_bits(freq, form) == w.bit_count());  // what the encoders' plans count
     auto bytes = w.finish();
     BitReader r(bytes.data(), bytes.size(), "t");
     auto back = HuffmanCode::read(r, alphabet, "t", form);

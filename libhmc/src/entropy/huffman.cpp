@@ -33,45 +33,56 @@ std::vector<std::uint8_t> huffman_lengths(const std::vector<std::uint64_t>& freq
   if (used.size() < 2) return len;
   if ((std::size_t{1} << max_len) < used.size()) fail(Status::internal_error, "alphabet too large for code length limit");
 
-  // Package-merge (Larmore & Hirschberg). Each item carries how many times
-  // each leaf occurs inside it; the 2n-2 lightest items of the final list
-  // give each leaf's code length.
+  // Package-merge (Larmore & Hirschberg). Items are leaves or packages of
+  // two items of the previous list, kept in one pool; the 2n-2 lightest
+  // items of the final list give each leaf's code length: the number of
+  // times it occurs inside them.
   std::sort(used.begin(), used.end(), [&](std::uint32_t a, std::uint32_t b) {
     return freq[a] != freq[b] ? freq[a] < freq[b] : a < b;
   });
   const std::size_t n = used.size();
   struct Item {
     std::uint64_t weight;
-    std::vector<std::uint16_t> count;  // per position in `used`
+    std::uint32_t left, right;  // a leaf: left = right = its position in `used`
   };
-  std::vector<Item> leaves(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    leaves[i].weight = freq[used[i]];
-    leaves[i].count.assign(n, 0);
-    leaves[i].count[i] = 1;
-  }
-  std::vector<Item> list = leaves;
+  std::vector<Item> pool;
+  pool.reserve(n * static_cast<std::size_t>(max_len));
+  for (std::uint32_t i = 0; i < n; ++i) pool.push_back({freq[used[i]], i, i});
+  const auto leaf = [&](std::uint32_t item) { return item < n; };
+  std::vector<std::uint32_t> list(n), packages, merged;
+  std::iota(list.begin(), list.end(), 0u);
   for (int level = 1; level < max_len; ++level) {
-    std::vector<Item> packages;
+    packages.clear();
     for (std::size_t i = 0; i + 1 < list.size(); i += 2) {
-      Item p{list[i].weight + list[i + 1].weight, list[i].count};
-      for (std::size_t k = 0; k < n; ++k) p.count[k] = static_cast<std::uint16_t>(p.count[k] + list[i + 1].count[k]);
-      packages.push_back(std::move(p));
+      packages.push_back(static_cast<std::uint32_t>(pool.size()));
+      pool.push_back({pool[list[i]].weight + pool[list[i + 1]].weight, list[i], list[i + 1]});
     }
-    std::vector<Item> merged;
-    merged.reserve(n + packages.size());
-    std::size_t a = 0, b = 0;
+    merged.clear();
+    std::uint32_t a = 0;
+    std::size_t b = 0;
     while (a < n || b < packages.size()) {
       // Leaves go first on equal weight: deterministic and keeps codes short.
-      if (b >= packages.size() || (a < n && leaves[a].weight <= packages[b].weight))
-        merged.push_back(leaves[a++]);
+      if (b >= packages.size() || (a < n && pool[a].weight <= pool[packages[b]].weight))
+        merged.push_back(a++);
       else
-        merged.push_back(std::move(packages[b++]));
+        merged.push_back(packages[b++]);
     }
-    list = std::move(merged);
+    list.swap(merged);
   }
-  for (std::size_t i = 0; i < 2 * n - 2; ++i)
-    for (std::size_t k = 0; k < n; ++k) len[used[k]] = static_cast<std::uint8_t>(len[used[k]] + list[i].count[k]);
+  std::vector<std::uint32_t> stack;
+  for (std::size_t i = 0; i < 2 * n - 2; ++i) {
+    stack.push_back(list[i]);
+    while (!stack.empty()) {
+      const std::uint32_t item = stack.back();
+      stack.pop_back();
+      if (leaf(item)) {
+        ++len[used[item]];
+      } else {
+        stack.push_back(pool[item].left);
+        stack.push_back(pool[item].right);
+      }
+    }
+  }
   return len;
 }
 
@@ -217,24 +228,42 @@ HuffmanCode HuffmanCode::read(BitReader& in, std::uint32_t alphabet, const std::
   return from_lengths(lengths, what);
 }
 
-void HuffmanCode::write(BitWriter& out, TableForm form) const {
-  const std::uint32_t a = alphabet();
-  if (single_) {
+namespace {
+
+// Counts the bits a BitWriter would be given (coded_bits).
+struct BitCounter {
+  std::uint64_t bits = 0;
+  void put(std::uint32_t, int n) { bits += static_cast<std::uint64_t>(n); }
+  void exp_golomb(std::uint32_t v) {
+    std::uint32_t x = v + 1;
+    int b = 0;
+    while ((x >> b) > 1) ++b;
+    bits += static_cast<std::uint64_t>(2 * b + 1);
+  }
+};
+
+// The table syntax (spec 7.1) of a code with these lengths (or the
+// one-symbol form), written to a BitWriter or counted by a BitCounter.
+template <class Out>
+void write_table(Out& out, const std::vector<std::uint8_t>& lengths, bool single, std::uint32_t single_symbol,
+                 TableForm form) {
+  const auto a = static_cast<std::uint32_t>(lengths.size());
+  if (single) {
     out.put(1, 1);
-    out.put(single_symbol_, symbol_width(a));
+    out.put(single_symbol, symbol_width(a));
     return;
   }
   out.put(0, 1);
   std::uint32_t s = 0;
   int previous = kDeltaStart;
   while (s < a) {
-    if (lengths_[s]) {
+    if (lengths[s]) {
       if (form == TableForm::nibbles) {
-        out.put(lengths_[s++], 4);
+        out.put(lengths[s++], 4);
         continue;
       }
-      const int delta = lengths_[s] - previous;
-      previous = lengths_[s++];
+      const int delta = lengths[s] - previous;
+      previous = lengths[s++];
       switch (delta) {
         case 0: out.put(0b00, 2); break;
         case 1: out.put(0b100, 3); break;
@@ -249,7 +278,7 @@ void HuffmanCode::write(BitWriter& out, TableForm form) const {
       continue;
     }
     std::uint32_t run = 0;
-    while (s + run < a && lengths_[s + run] == 0) ++run;
+    while (s + run < a && lengths[s + run] == 0) ++run;
     if (form == TableForm::nibbles) {
       out.put(0, 4);
     } else {
@@ -263,6 +292,28 @@ void HuffmanCode::write(BitWriter& out, TableForm form) const {
     out.exp_golomb(run - 1);
     s += run;
   }
+}
+
+}  // namespace
+
+void HuffmanCode::write(BitWriter& out, TableForm form) const {
+  write_table(out, lengths_, single_, single_symbol_, form);
+}
+
+std::uint64_t coded_bits(const std::vector<std::uint64_t>& freq, TableForm form) {
+  std::uint32_t used = 0, last = 0;
+  for (std::uint32_t s = 0; s < freq.size(); ++s)
+    if (freq[s]) ++used, last = s;
+  BitCounter counter;
+  if (used <= 1) {
+    write_table(counter, std::vector<std::uint8_t>(freq.size(), 0), true, last, form);
+    return counter.bits;
+  }
+  const std::vector<std::uint8_t> lengths = huffman_lengths(freq);
+  write_table(counter, lengths, false, 0, form);
+  std::uint64_t bits = counter.bits;
+  for (std::size_t s = 0; s < freq.size(); ++s) bits += freq[s] * lengths[s];
+  return bits;
 }
 
 std::uint32_t HuffmanCode::decode(BitReader& in) const {

@@ -29,6 +29,11 @@ double entropy_bits(const std::uint64_t* freq, std::size_t n);
 /// encoder writes since spec 0.10).
 enum class TableForm : std::uint8_t { nibbles, deltas };
 
+/// The bits of the code-length table of the code from_frequencies(freq)
+/// builds, in `form`, plus those of the symbols counted in freq: what writing
+/// both would take, computed without building the code (encoders' plans).
+std::uint64_t coded_bits(const std::vector<std::uint64_t>& freq, TableForm form = TableForm::deltas);
+
 /// A canonical code over an alphabet of `size` symbols.
 class HuffmanCode {
  public:

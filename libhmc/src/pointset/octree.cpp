@@ -407,7 +407,7 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
           for (std::size_t v = 0; v < 255; ++v) merged[std::min(c, classes - 1)][v] += freq[g][c * 255 + v];
         for (const auto& f : merged) {
           const auto padded = two_symbols_at_least(f);
-          bits += static_cast<double>(table_and_symbols(padded, HuffmanCode::from_frequencies(padded)));
+          bits += static_cast<double>(coded_bits(padded));
         }
       }
       if (g == 0 || bits < least) least = bits, chosen = g;

@@ -349,14 +349,6 @@ class Traversal {
   std::vector<int> gaps_;
 };
 
-// Bits of a code-length table plus the symbols it codes.
-std::uint64_t code_bits(const std::vector<std::uint64_t>& freq) {
-  const HuffmanCode code = HuffmanCode::from_frequencies(freq);
-  BitWriter w;
-  code.write(w);
-  return w.bit_count() + code.cost(freq);
-}
-
 // Which table each (depth, class, plane context) slot uses. Per class and
 // plane context, consecutive depths share a table when that costs fewer bits
 // than a table of their own. Slot (d, k, x) is (d * classes + k) * planes + x,
@@ -427,11 +419,11 @@ TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes
         const auto slot = static_cast<std::size_t>((d * classes + k) * planes + x);
         plan.table[slot] = current;
         if (!used) continue;
-        const std::uint64_t alone = code_bits(f);
+        const std::uint64_t alone = coded_bits(f);
         if (current >= 0) {
           std::vector<std::uint64_t> merged = plan.freq[static_cast<std::size_t>(current)];
           for (std::size_t s = 0; s < kAlphabet; ++s) merged[s] += f[s];
-          const std::uint64_t together = code_bits(merged);
+          const std::uint64_t together = coded_bits(merged);
           if (together - current_bits <= alone) {
             plan.freq[static_cast<std::size_t>(current)] = std::move(merged);
             current_bits = together;
