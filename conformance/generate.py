@@ -424,15 +424,12 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     bw = BitWriter()
     bw.put(neighbours, 4)
     bw.put(classes - 1, 2)
-    if fit is not None:
+    if fit is not None or gap is not None:
         bw.put(planes - 1, 1)
-        bw.put(fit, 4)
-        bw.put(1 if isinstance(gap, list) else 0, 1)
+        if fit is not None:
+            bw.put(fit, 4)
+            bw.put(1 if isinstance(gap, list) else 0, 1)
         for g in (gap if isinstance(gap, list) else [gap or 0]):
-            bw.put(g, 4)
-    elif gap is not None:
-        bw.put(planes - 1, 1)
-        for g in (gap if isinstance(gap, list) else [gap]):
             bw.put(g, 4)
     coder = {}
     for j in slots:

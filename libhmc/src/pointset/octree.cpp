@@ -339,7 +339,6 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   return w.finish();
 }
 
-
 // Whether ranking a large depth may pay, judged on a Morton-contiguous
 // (so spatially compact) block of its nodes: 8,192 nodes indexed by
 // themselves, the middle half ranked. An estimate (neighbours outside the
@@ -405,10 +404,7 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
         std::vector<std::vector<std::uint64_t>> merged(classes, std::vector<std::uint64_t>(255, 0));
         for (std::size_t c = 0; c < 4; ++c)
           for (std::size_t v = 0; v < 255; ++v) merged[std::min(c, classes - 1)][v] += freq[g][c * 255 + v];
-        for (const auto& f : merged) {
-          const auto padded = two_symbols_at_least(f);
-          bits += static_cast<double>(coded_bits(padded));
-        }
+        for (const auto& f : merged) bits += static_cast<double>(coded_bits(two_symbols_at_least(f)));
       }
       if (g == 0 || bits < least) least = bits, chosen = g;
     }

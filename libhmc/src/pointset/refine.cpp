@@ -18,7 +18,7 @@ namespace hmc::detail {
 namespace {
 
 constexpr int kMaxNeighbours = 15;        // 4-bit header field
-constexpr int kQuadricNeighbours = 10;       // the encoder's quadric fit (coder 5)
+constexpr int kQuadricNeighbours = 10;    // the encoder's quadric fit (coder 5)
 constexpr int kMaxClasses = 4;            // 2-bit header field
 constexpr int kMaxGap = 15;               // 4-bit header field of coder 3
 constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
@@ -449,16 +449,13 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
   const OctreeCoder coder = coder_of(plan);
-  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps) {
+  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric) {
     w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
-    if (coder == OctreeCoder::gap) w.put(static_cast<std::uint32_t>(plan.gaps[0]), 4);
-    else
-      for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), 4);
-  } else if (coder == OctreeCoder::quadric) {
-    w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
-    w.put(static_cast<std::uint32_t>(plan.fit), 4);
     const bool varies = per_depth(plan.gaps);
-    w.put(varies ? 1u : 0u, 1);
+    if (coder == OctreeCoder::quadric) {
+      w.put(static_cast<std::uint32_t>(plan.fit), 4);
+      w.put(varies ? 1u : 0u, 1);
+    }
     if (!varies) w.put(static_cast<std::uint32_t>(plan.gaps[0]), 4);
     else
       for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), 4);
