@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x0f"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x10"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -333,11 +333,29 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
-def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None):
+def causal_points(nodes, occs, i, nb, neighbours, h):
+    """§8.4: the points that rank node i of a depth (doubled coordinates):
+    its neighbours' centres, those decoded before it (index below i, whose
+    occupancies occs[j] are known) replaced by their occupied children's
+    centres; 32 at most."""
+    P = []
+    X, Y, Z = nodes[i]
+    for j in nb.nearest((2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h), min(neighbours, len(nodes))):
+        if j < i:
+            Xj, Yj, Zj = nodes[j]
+            P += [((2 * Xj + (c >> 2)) * h + h // 2, (2 * Yj + ((c >> 1) & 1)) * h + h // 2,
+                   (2 * Zj + (c & 1)) * h + h // 2) for c in range(8) if occs[j] >> c & 1]
+        else:
+            P.append(nb.pts[j])
+    return P[:32]
+
+
+def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None):
     """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
     (refdec.child_order over the node centres of each depth); ranked[d]
     says whether depth d is ranked; `classes` contexts per ranked depth.
-    gaps: coder 2 (§8.3) with weight gaps[d] at each ranked depth."""
+    gaps: coder 2 (§8.3) with weight gaps[d] at each ranked depth.
+    quadric: coder 3 (§8.4), with gaps, and quadric[d] the depth's flag."""
     syms = []
     for d, nodes, occ_by_node in octree_levels(points, q):
         if not ranked[d]:
@@ -346,10 +364,16 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None):
         h = 1 << (q - d)
         centres = [(X * h + h // 2, Y * h + h // 2, Z * h + h // 2) for (X, Y, Z) in nodes]
         nb = refdec.Neighbours(centres, q)
+        occs = [occ_by_node[n] for n in nodes]
         row = []
-        for node in nodes:
-            pi, split = refdec.child_order(node, d, q, 0, centres, nb, neighbours, want_split=True,
-                                           gap=gaps[d] if gaps else 0, gap_from=1)
+        for i, node in enumerate(nodes):
+            if quadric is not None:
+                P = causal_points(nodes, occs, i, nb, neighbours, h)
+                pi, split = refdec.child_order(node, d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
+                                               fit=len(P) if quadric[d] else 0, points=P)
+            else:
+                pi, split = refdec.child_order(node, d, q, 0, centres, nb, neighbours, want_split=True,
+                                               gap=gaps[d] if gaps else 0, gap_from=1)
             occ = occ_by_node[node]
             ctx = min((0, 1, 2, 2, 3)[split], classes - 1)
             row.append((ctx, refdec.E.index(sum(1 << r for r in range(8) if occ >> pi[r] & 1))))
@@ -362,6 +386,8 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None):
         bw.put(1 if ranked[d] else 0, 1)
         if ranked[d] and gaps:
             bw.put(gaps[d], 4)
+        if ranked[d] and quadric is not None:
+            bw.put(1 if quadric[d] else 0, 1)
         if ranked[d]:
             # One table per context, of two symbols at least (§8.2): a context
             # with fewer gets phantom symbols 0 and 1.
@@ -376,12 +402,13 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None):
                 coders[d][v[0]].put(bw, v[1])
             else:
                 coders[d][0].put(bw, v)
-    return (b"\x02" if gaps else b"\x01") + bw.bytes()
+    return (b"\x03" if quadric is not None else b"\x02" if gaps else b"\x01") + bw.bytes()
 
 
-def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None):
+def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, quadric=None):
     pts = sorted(set(pts))
-    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps), counts=(len(pts),), kind=kind, q=q,
+    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps, quadric), counts=(len(pts),),
+                     kind=kind, q=q,
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
 
@@ -1207,6 +1234,25 @@ def hb_base_gaps():
     return a, b
 
 
+def hb_base_causal():
+    # BASE coder 3 (causal points): points on a sphere at q = 8, neighbours
+    # 10, quadric and plane depths mixed with weights, a plain depth, 3
+    # contexts; a lattice with random points (ties, fits that fail: points on
+    # few planes) with neighbours 15 (up to 32 points, lists cut short);
+    # neighbours 3 and 1 (fewer than 6 points: no quadric even where flagged).
+    a = base_ranked_stream(0, 8, sphere_pts(500, 8, 17), 10, [False] + [True] * 7, classes=3,
+                           gaps=[0, 0, 4, 15, 1, 6, 0, 3], quadric=[False, True, False, True, True, False, True, True])
+    b = base_ranked_stream(0, 6, lattice_pts(5, 4, (3, 2, 5)) + rand_pts(30, 6, 44), 15, [True] * 6, classes=4,
+                           gaps=[2, 8, 0, 11, 3, 1], quadric=[True] * 6)
+    c = base_ranked_stream(1, 5, sphere_pts(120, 5, 23), 3, [True] * 5, classes=2, gaps=[0, 2, 4, 6, 8],
+                           quadric=[True, False, True, False, True])
+    d = base_ranked_stream(0, 4, rand_pts(40, 4, 45), 1, [False, True, True, True], classes=1, gaps=[0, 5, 0, 9],
+                           quadric=[False, True, True, True])
+    e = base_ranked_stream(0, 3, rand_pts(20, 3, 46), 0, [True] * 3, classes=2, gaps=[3, 0, 7],
+                           quadric=[True, True, False])
+    return a, b, c, d, e
+
+
 def hb_base_ranked_sphere():
     return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8, classes=4)
 
@@ -1381,6 +1427,16 @@ HANDBUILT = [
      "BASE coder 2 (gap weights): points near a sphere on a lattice (ties), neighbours 10, depth 0 plain, weights 15, 3 and 8 at the ranked depths, 3 contexts", sec("base", "huff")),
     ("base-gaps-neighbours-1", lambda: hb_base_gaps()[1], P,
      "BASE coder 2 with neighbours 1 (no plane: the weights change nothing), 2 contexts, kind surface", sec("base", "huff")),
+    ("base-causal", lambda: hb_base_causal()[0], P,
+     "BASE coder 3 (causal points): points on a sphere at q = 8, neighbours 10, depth 0 plain, quadric and plane depths mixed, weights 0-15, 3 contexts", sec("base", "huff")),
+    ("base-causal-lattice", lambda: hb_base_causal()[1], P,
+     "BASE coder 3 on lattice points plus random ones, neighbours 15 (lists cut at 32 points), every depth quadric: ties and fits that fail, 4 contexts", sec("base", "huff")),
+    ("base-causal-few", lambda: hb_base_causal()[2], P,
+     "BASE coder 3 with neighbours 3 (at most 24 points, some nodes fewer than 6: no quadric), kind surface, 2 contexts", sec("base", "huff")),
+    ("base-causal-neighbours-1", lambda: hb_base_causal()[3], P,
+     "BASE coder 3 with neighbours 1 (the node's own centre only: no plane, no quadric), a plain depth, 1 context", sec("base", "huff")),
+    ("base-causal-neighbours-0", lambda: hb_base_causal()[4], P,
+     "BASE coder 3 with neighbours 0 (no points: every child ties, the order is the child number), weights and quadric flags that change nothing, 2 contexts", sec("base", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
      "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
@@ -1607,8 +1663,10 @@ NEGATIVE = [
     ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
     ("neg-base-gaps-cut", "bad_layer", P, "BASE coder 2 at q = 1 whose payload ends inside the weight of its ranked depth", ["8.3", "13"],
      lambda: stream_q1(b"\x02" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(1, 1), bw.put(1, 1))))),
-    ("neg-base-coder", "bad_layer", P, "BASE coder 3", ["8", "13"],
-     lambda: stream_q1(b"\x03" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-coder", "bad_layer", P, "BASE coder 4", ["8", "13"],
+     lambda: stream_q1(b"\x04" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-causal-cut", "bad_layer", P, "BASE coder 3 at q = 2 whose payload ends just before the quadric flag of its ranked depth 1 (depth 0 plain, its table 28 bits in the 4-bit form: 40 bits in all)", ["8.4", "13"],
+     lambda: stream_q1(b"\x03" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(0, 1), write_table(bw, 256, lengths={0: 1, 1: 1}), bw.put(1, 1), bw.put(5, 4))), q=2)),
     ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 1: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],
      lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(1, 1), write_table(bw, 256, single=255))))),
     ("neg-base-ranked-single", "bad_layer", P, "BASE coder 1: a one-symbol code at a ranked depth (a 125-byte stream that would ask for 5.5 million nearest-neighbour searches)", ["8.2", "14", "13"],

@@ -258,16 +258,17 @@ def morton_children(node, d, q):
 def decode_base(payload, q, n, form=1):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
-    if payload[0] not in (0, 1, 2):
+    if payload[0] not in (0, 1, 2, 3):
         raise DecodeError("bad_layer", "BASE: unknown coder %d" % payload[0])
     coder = payload[0]
     br = BitReader(payload, 1, "bad_layer", "BASE")
     neighbours = br.bits(4) if coder >= 1 else 0
     classes = br.bits(2) + 1 if coder >= 1 else 1
-    ranked, tables, gaps = [], [], []
+    ranked, tables, gaps, quadric = [], [], [], []
     for _ in range(q):
         ranked.append(coder >= 1 and br.bits(1) == 1)
-        gaps.append(br.bits(4) if ranked[-1] and coder == 2 else 0)  # §8.3: the depth's gap weight
+        gaps.append(br.bits(4) if ranked[-1] and coder >= 2 else 0)  # §8.3: the depth's gap weight
+        quadric.append(br.bits(1) == 1 if ranked[-1] and coder == 3 else False)  # §8.4
         tables.append([read_code(br, 255, form) for _ in range(classes)] if ranked[-1] else [read_code(br, 256, form)])
         if ranked[-1] and any(t.single is not None for t in tables[-1]):
             # §8.2: every ranked node costs a bit
@@ -280,11 +281,27 @@ def decode_base(payload, q, n, form=1):
             h = 1 << (q - d)
             centres = [(X * h + h // 2, Y * h + h // 2, Z * h + h // 2) for (X, Y, Z) in nodes]
             nb = Neighbours(centres, q)
-        for (X, Y, Z) in nodes:
-            if ranked[d]:
+        occs = []
+        for i, (X, Y, Z) in enumerate(nodes):
+            if ranked[d] and coder == 3:
+                # §8.4: neighbours decoded before the node stand for their
+                # occupied children's centres; 32 points at most
+                P = []
+                for j in nb.nearest((2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h), min(neighbours, len(nodes))):
+                    if j < i:
+                        Xj, Yj, Zj = nodes[j]
+                        P += [((2 * Xj + (c >> 2)) * h + h // 2, (2 * Yj + ((c >> 1) & 1)) * h + h // 2,
+                               (2 * Zj + (c & 1)) * h + h // 2) for c in range(8) if occs[j] >> c & 1]
+                    else:
+                        P.append(nb.pts[j])
+                P = P[:32]
+                pi, split = child_order((X, Y, Z), d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
+                                        fit=len(P) if quadric[d] else 0, points=P)
+            elif ranked[d]:
                 # §8.3: g over the neighbours other than the node itself
                 pi, split = child_order((X, Y, Z), d, q, 0, centres, nb, neighbours, want_split=True, gap=gaps[d],
                                         gap_from=1)
+            if ranked[d]:
                 x = (0, 1, 2, 2, 3)[split]
                 s = t[min(x, classes - 1)].decode(br, "bad_layer")
                 rho = E[s]
@@ -293,6 +310,7 @@ def decode_base(payload, q, n, form=1):
                 occ = t[0].decode(br, "bad_layer")
                 if occ == 0:
                     raise DecodeError("bad_layer", "BASE: zero occupancy at depth %d" % d)
+            occs.append(occ)
             for c in range(8):
                 if occ >> c & 1:
                     if len(nxt) >= n:
@@ -452,19 +470,28 @@ def quadric_keys(n, j, O, F, h, k):
     return keys
 
 
-def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, gap_from=0, fit=0):
+def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, gap_from=0, fit=0, points=None):
     """§8A.1 ranking: returns pi, pi[r] = child at rank r (and, with
     want_split, how many children lie on the plane's smaller side, §8.2).
     gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1. gap_from:
     the distances g skip the first gap_from neighbours (§8.3: the node itself).
-    fit: coder 5's F (§8A.6), the points the quadric is fitted to."""
+    fit: coder 5's F (§8A.6), the points the quadric is fitted to.
+    points: the neighbours themselves (§8.4), instead of a search in coarse;
+    the first `fit` of them are the fit points."""
     X, Y, Z = node
     h = 1 << (q - d)
     O = (2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h)
-    k = min(neighbours, len(coarse))
-    f = min(fit, len(coarse))
-    idx = nb.nearest(O, max(k, f))
-    P = [nb.pts[i] for i in idx[:k]]
+    if points is None:
+        k = min(neighbours, len(coarse))
+        f = min(fit, len(coarse))
+        idx = nb.nearest(O, max(k, f))
+        P = [nb.pts[i] for i in idx[:k]]
+        fit_points = [nb.pts[i] for i in idx[:f]]
+    else:
+        P = list(points)
+        k = len(P)
+        f = fit
+        fit_points = P[:f]
     S = [sum(p[a] for p in P) for a in range(3)]
 
     def mom(a, b):
@@ -490,7 +517,7 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
     N = n[0] * n[0] + n[1] * n[1] + n[2] * n[2]
     quadric = None
     if f >= 6 and n[j] > 0:
-        quadric = quadric_keys(n, j, O, [nb.pts[i] for i in idx[:f]], h, k)
+        quadric = quadric_keys(n, j, O, fit_points, h, k)
     keys = []
     above = below = 0
     for c in range(8):

@@ -55,11 +55,10 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   CHECK(r.out.find("\"type\": \"HEAD\"") != std::string::npos);
   CHECK(r.out.find("\"points\": 1800") != std::string::npos);
   CHECK(r.out.find("\"kind\": \"surface\"") != std::string::npos);
-  // The base layer's coder is named from its payload (octree, ranked octree
-  // or ranked octree with gap weights).
+  // The base layer's coder is named from its payload (the encoder writes
+  // the octree or the ranked octree with causal points).
   const bool named = r.out.find("\"coder\": 0, \"coder_name\": \"octree\"") != std::string::npos ||
-                     r.out.find("\"coder\": 1, \"coder_name\": \"ranked octree\"") != std::string::npos ||
-                     r.out.find("\"coder\": 2, \"coder_name\": \"ranked octree, gap weights\"") != std::string::npos;
+                     r.out.find("\"coder\": 3, \"coder_name\": \"ranked octree, causal points\"") != std::string::npos;
   CHECK(named);
 }
 

@@ -524,13 +524,13 @@ TEST_CASE("malformed refinement streams are rejected, never misread") {
   }
 }
 
-TEST_CASE("base layer: the ranked octree (coders 1, 2) codes surfaces smaller and decodes every set exactly") {
+TEST_CASE("base layer: the ranked octree (coders 2, 3) codes surfaces smaller and decodes every set exactly") {
   // A sampled surface: the plane through the neighbouring node centres
-  // predicts the children, so coder 1 or 2 is chosen and is smaller.
+  // predicts the children, so the ranked coder is chosen and is smaller.
   const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
   const auto base = encode_base(sphere, 12);
   REQUIRE(!base.empty());
-  CHECK((base[0] == 1 || base[0] == 2));
+  CHECK(base[0] == 3);
   const auto plain = encode_octree(sphere, 12);
   CHECK(base.size() < plain.size() + 1);
   Points sorted = sphere;
@@ -544,29 +544,103 @@ TEST_CASE("base layer: the ranked octree (coders 1, 2) codes surfaces smaller an
       Points p = quantize(m, q);
       sort_canonical(p);
       p.erase(std::unique(p.begin(), p.end()), p.end());
-      const auto b = encode_base(p, q);
-      CHECK((b[0] == 0 || b[0] == 1 || b[0] == 2));
-      CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
+      for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{3}}) {
+        const auto b = encode_base(p, q, coder);
+        CHECK((b[0] == 0 || b[0] == coder));
+        CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
+      }
     }
   }
   // A single point gains nothing from ranking: coder 0.
   const Points one{{5, 6, 7}};
   CHECK(encode_base(one, 4)[0] == 0);
   // Unknown coder, empty payload, a wrong count.
-  const std::uint8_t three[] = {3, 0};
-  CHECK(status_of([&] { decode_base(three, 2, 4, 1); }) == Status::bad_layer);
-  CHECK(status_of([&] { decode_base(three, 0, 4, 1); }) == Status::bad_layer);
+  const std::uint8_t four[] = {4, 0};
+  CHECK(status_of([&] { decode_base(four, 2, 4, 1); }) == Status::bad_layer);
+  CHECK(status_of([&] { decode_base(four, 0, 4, 1); }) == Status::bad_layer);
+  CHECK(status_of([&] { encode_base(sphere, 12, 1); }) == Status::invalid_argument);
   CHECK(status_of([&] { decode_base(base.data(), base.size(), 12, sorted.size() - 1); }) == Status::bad_layer);
   CHECK(status_of([&] { decode_base(base.data(), base.size() - 1, 12, sorted.size()); }) == Status::bad_layer);
 }
 
-// The sorting and Morton helpers every layer decoder ends with.
+// A ranked depth's header fields in a BASE payload of coder 2 or 3
+// (spec 8.3, 8.4): whether it is ranked, its weight and its quadric flag.
+struct RankedDepth {
+  bool ranked = false;
+  int gap = 0;
+  bool quadric = false;
+};
+std::vector<RankedDepth> ranked_depths(const std::vector<std::uint8_t>& base, int q) {
+  REQUIRE((base[0] == 2 || base[0] == 3));
+  BitReader in(base.data() + 1, base.size() - 1, "test");
+  in.get(4);
+  const int classes = static_cast<int>(in.get(2)) + 1;
+  std::vector<RankedDepth> out(static_cast<std::size_t>(q));
+  for (auto& d : out) {
+    d.ranked = in.get(1) == 1;
+    if (d.ranked) d.gap = static_cast<int>(in.get(4));
+    if (d.ranked && base[0] == 3) d.quadric = in.get(1) == 1;
+    for (int j = 0; j < (d.ranked ? classes : 1); ++j) HuffmanCode::read(in, d.ranked ? 255 : 256, "test", TableForm::deltas);
+  }
+  return out;
+}
+
+TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before, and by a quadric where it pays") {
+  // On sampled curved surfaces the occupied children of the neighbouring
+  // nodes already decoded locate the sheet twice as finely as their centres:
+  // coder 3 must beat coder 2 clearly, and choose the quadric at some depth.
+  for (const auto& mesh : {samples::torus(160, 60, 1.0, 0.2), samples::uv_sphere(80, 120)}) {
+    const Points pts = quantize(mesh, 12);
+    Points sorted = pts;
+    sort_canonical(sorted);
+    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    const auto two = encode_base(pts, 12, 2), three = encode_base(pts, 12, 3);
+    REQUIRE(two[0] == 2);
+    REQUIRE(three[0] == 3);
+    MESSAGE(sorted.size() << " points: coder 2 " << two.size() << " bytes, coder 3 " << three.size());
+    CHECK(100 * three.size() < 97 * two.size());
+    CHECK(decode_base(three.data(), three.size(), 12, sorted.size()) == sorted);
+    const auto depths = ranked_depths(three, 12);
+    CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.quadric; }));
+    CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.ranked && !d.quadric; }));
+    // The flags and the causal points matter: read as coder 2 (no flags,
+    // node centres only), the stream fails or gives another set.
+    auto as_two = three;
+    as_two[0] = 2;
+    bool same = false;
+    try {
+      same = decode_base(as_two.data(), as_two.size(), 12, sorted.size()) == sorted;
+    } catch (const StreamError&) {
+    }
+    CHECK(!same);
+  }
+  // The points of a node are capped at 32: with 15 neighbours on a dense
+  // lattice (up to 8 children each) the lists are cut, and the set still
+  // comes back; the same at q = 21 with points at the grid's far corners
+  // (the bounds of spec 8.4).
+  Points lattice;
+  for (std::uint32_t x = 0; x < 9; ++x)
+    for (std::uint32_t y = 0; y < 9; ++y)
+      for (std::uint32_t z = 0; z < 9; ++z) lattice.push_back({x, y, z});
+  const std::uint32_t far = (1u << 21) - 1;
+  for (const GridPoint& c : Points{{far, far, far}, {far, far - 1, far}, {far, 0, 0}, {far - 1, 1, 0}, {0, far, 1}})
+    lattice.push_back(c);
+  for (int q : {6, 21}) {
+    Points p;
+    for (const GridPoint& g : lattice)
+      if (((g[0] | g[1] | g[2]) >> q) == 0) p.push_back(g);
+    p = sorted(p);
+    const auto b = encode_base(p, q);
+    CHECK(b[0] == 3);
+    CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
+  }
+}
+
 TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and the node itself is not a gap") {
   // Points kept at least r apart on a sphere, as a scan spaces them: at the
   // depths of one or two points per node, the occupied children lie far from
-  // the neighbouring nodes' centres. Coder 2 costs 4 bits per ranked depth
-  // more than coder 1 for the same symbols, so it is chosen only if the
-  // weights make the symbols cheaper.
+  // the neighbouring nodes' centres, and weights above 0 make the symbols
+  // cheaper.
   const Points candidates = quantize(samples::random_sphere_points(30000, 7), 12);
   Points even;
   {
@@ -592,9 +666,11 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
   }
   sort_canonical(even);
   REQUIRE(even.size() > 2000);
-  const auto base = encode_base(even, 12);
+  const auto base = encode_base(even, 12, 2);
   CHECK(base[0] == 2);
   CHECK(decode_base(base.data(), base.size(), 12, even.size()) == even);
+  const auto depths = ranked_depths(base, 12);
+  CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.gap > 0; }));
   // The weights rank by distance to the neighbours other than the node
   // itself: with the node's own centre (distance 0 from no child, and the
   // same from all eight) the gap term could not tell children apart.
@@ -610,6 +686,7 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
   CHECK(all == plain);  // every child is equally far from the node's own centre
 }
 
+// The sorting and Morton helpers every layer decoder ends with.
 TEST_CASE("radix_sort, morton_point and sort_canonical agree with the plain definitions") {
   std::mt19937_64 rng(5);
   for (int bits : {0, 1, 7, 13, 24, 36, 47, 63, 64}) {

@@ -29,6 +29,7 @@ const char* base_coder_name(int coder) {
     case 0: return "octree";
     case 1: return "ranked octree";
     case 2: return "ranked octree, gap weights";
+    case 3: return "ranked octree, causal points";
     default: return "unknown";
   }
 }

@@ -166,11 +166,12 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
 
 namespace {
 
-constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2;
+constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2, kCausalCoder = 3;
 // The gap weights the reference encoder tries at a ranked depth (coder 2).
 constexpr std::array<int, 9> kGapChoices{0, 1, 2, 3, 4, 6, 8, 11, 15};
 constexpr int kMaxNeighbours = 15;  // 4-bit field
 constexpr int kBaseNeighbours = 10;  // what the reference encoder uses
+constexpr int kCausalPoints = 32;    // coder 3: the most points a node is ranked by (spec 8.4)
 
 // The nodes of one depth in Morton order, with the centres of their cells
 // in doubled grid coordinates, and their nearest neighbours: looked up in a
@@ -206,16 +207,22 @@ class DepthNodes {
   /// the k nearest node centres of the depth, the node's own included.
   /// Returns the node's context (spec 8.2): from how many children lie on
   /// the smaller side of the plane, 0 | 1 | 2-3 | 4 -> 0 | 1 | 2 | 3.
-  int rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order, int gap = 0) const {
+  /// `causal`, `quadric`: coder 3 (spec 8.4), below.
+  int rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order, int gap = 0,
+           const std::uint8_t* causal = nullptr, bool quadric = false) const {
     int context = 0;
-    keys(node, i, neighbours, gap > 0, context).order(0u, gap, order);
+    keys(node, i, neighbours, gap > 0, context, causal, quadric).order(0u, gap, order);
     return context;
   }
 
   /// The keys that rank node i's children, with its context; `with_gaps`:
-  /// for gap weights (coder 2, spec 8.3), the distances to the nearest
-  /// neighbour other than the node itself (the first).
-  ChildKeys keys(std::uint64_t node, std::size_t i, int neighbours, bool with_gaps, int& context) const {
+  /// for gap weights (coders 2 and 3, spec 8.3), the distances to the
+  /// nearest neighbour other than the node itself (the first). `causal`
+  /// (coder 3, spec 8.4): the occupancies of the depth's nodes before i
+  /// (causal[j], j < i); a neighbour among them stands for the centres of
+  /// its occupied children; `quadric`: rank by the quadric through them all.
+  ChildKeys keys(std::uint64_t node, std::size_t i, int neighbours, bool with_gaps, int& context,
+                 const std::uint8_t* causal = nullptr, bool quadric = false) const {
     const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
     std::array<std::uint32_t, kMaxNeighbours> near{};
     int found = lattice_ ? lattice_->nearest(i, k, near.data()) : -1;
@@ -225,35 +232,55 @@ class DepthNodes {
       found = tree_->nearest(centres_[i], k, hits.data());
       for (int j = 0; j < found; ++j) near[static_cast<std::size_t>(j)] = hits[static_cast<std::size_t>(j)].index;
     }
-    std::array<Doubled, kMaxNeighbours> nb{};
-    for (int j = 0; j < found; ++j) {
-      const auto& c = centres_[near[static_cast<std::size_t>(j)]];
-      nb[static_cast<std::size_t>(j)] = {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[1]),
-                                         static_cast<std::int32_t>(c[2])};
+    std::array<Doubled, kCausalPoints> nb{};
+    int count = 0;
+    const std::int64_t h = std::int64_t{1} << (q_ - d_);
+    for (int j = 0; j < found && count < kCausalPoints; ++j) {
+      const std::uint32_t at = near[static_cast<std::size_t>(j)];
+      if (causal && at < i) {
+        // Child c's centre, (2X + bit)·h + h/2 per axis (spec 8A.1).
+        for (unsigned occ = causal[at]; occ != 0 && count < kCausalPoints; occ &= occ - 1) {
+          const unsigned c = static_cast<unsigned>(__builtin_ctz(occ));
+          auto& x = nb[static_cast<std::size_t>(count++)];
+          for (std::size_t a = 0; a < 3; ++a)
+            x[a] = static_cast<std::int32_t>((2 * std::int64_t{cells_[at][a]} + ((c >> (2 - a)) & 1)) * h + h / 2);
+        }
+        continue;
+      }
+      const auto& c = centres_[at];
+      nb[static_cast<std::size_t>(count++)] = {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[1]),
+                                               static_cast<std::int32_t>(c[2])};
     }
-    ChildKeys out(morton_point(node, d_), d_, q_, nb.data(), found, with_gaps, 1);
+    ChildKeys out(morton_point(node, d_), d_, q_, nb.data(), count, with_gaps, 1, quadric ? count : 0);
     const int split = out.split();
     context = split <= 1 ? split : split <= 3 ? 2 : 3;
     return out;
   }
 
-  /// The ranked occupancy of node i (its index in E, spec 8.2) for the
-  /// occupancy `occupancy`; `context` receives the node's context.
-  std::uint8_t symbol(std::uint64_t node, std::size_t i, unsigned occupancy, int& context) const {
+  /// Coder 3's ranked occupancy of node i (its index in E, spec 8.2) for
+  /// the occupancy `occupancy`, plane ranking and no gap weight; `causal`
+  /// as for keys(); `context` receives the node's context.
+  std::uint8_t symbol(std::uint64_t node, std::size_t i, unsigned occupancy, const std::uint8_t* causal,
+                      int& context) const {
     std::array<int, 8> order{};
-    context = rank(node, i, kBaseNeighbours, order);
+    context = rank(node, i, kBaseNeighbours, order, 0, causal);
     return ranked_symbol(order, occupancy);
   }
 
-  /// The symbols of node i for every weight of kGapChoices.
-  std::array<std::uint8_t, kGapChoices.size()> symbols(std::uint64_t node, std::size_t i, unsigned occupancy,
-                                                       int& context) const {
-    const ChildKeys k = keys(node, i, kBaseNeighbours, true, context);
-    std::array<std::uint8_t, kGapChoices.size()> out{};
+  /// Coder 3's symbols of node i for every weight of kGapChoices, ranked by
+  /// the plane (the first kGapChoices.size()) and by the quadric (the rest);
+  /// coder 2's when `causal` is null (the plane only; the rest left 0).
+  std::array<std::uint8_t, 2 * kGapChoices.size()> symbols(std::uint64_t node, std::size_t i, unsigned occupancy,
+                                                           const std::uint8_t* causal, int& context) const {
+    std::array<std::uint8_t, 2 * kGapChoices.size()> out{};
     std::array<int, 8> order{};
-    for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
-      k.order(0u, kGapChoices[g], order);
-      out[g] = ranked_symbol(order, occupancy);
+    for (const bool quadric : {false, true}) {
+      if (quadric && !causal) break;
+      const ChildKeys k = keys(node, i, kBaseNeighbours, true, context, causal, quadric);
+      for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
+        k.order(0u, kGapChoices[g], order);
+        out[(quadric ? kGapChoices.size() : 0) + g] = ranked_symbol(order, occupancy);
+      }
     }
     return out;
   }
@@ -285,13 +312,13 @@ std::vector<std::uint64_t> two_symbols_at_least(std::vector<std::uint64_t> freq)
   return freq;
 }
 
-// Coder 1 with `classes` contexts per ranked depth, from the plain and
-// ranked symbols of every depth (ranked[d][i], context[d][i]).
-// Coder 2 when `gaps` (the gap weight of each depth) is given.
+// Coder 3 with `classes` contexts per ranked depth, from the plain and
+// ranked symbols of every depth (ranked[d][i], context[d][i]) and each
+// depth's gap weight and quadric flag; coder 2 (no flags) unless `causal`.
 std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels, int q, int classes,
                                        const std::vector<std::vector<std::uint8_t>>& ranked_sym,
                                        const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked,
-                                       const std::vector<int>* gaps = nullptr) {
+                                       const std::vector<int>& gaps, const std::vector<bool>& quadric, bool causal) {
   BitWriter w;
   w.put(kBaseNeighbours, 4);
   w.put(static_cast<std::uint32_t>(classes - 1), 2);
@@ -314,12 +341,13 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
       ranked_bits += table_and_symbols(f, ranked_codes.back());
     }
     // Rank only where it pays for the decoder's searches: 2% of the depth.
-    if (gaps) ranked_bits += 4;  // the depth's weight
+    ranked_bits += causal ? 5 : 4;  // the depth's weight (and quadric flag)
     const bool use = !ranked_sym[sd].empty() && 100 * ranked_bits < 98 * plain_bits;
     ranked[sd] = use;
     any_ranked = any_ranked || use;
     w.put(use ? 1 : 0, 1);
-    if (use && gaps) w.put(static_cast<std::uint32_t>((*gaps)[sd]), 4);
+    if (use) w.put(static_cast<std::uint32_t>(gaps[sd]), 4);
+    if (use && causal) w.put(quadric[sd] ? 1 : 0, 1);
     if (use) {
       codes[sd] = std::move(ranked_codes);
     } else {
@@ -344,8 +372,9 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
 // themselves, the middle half ranked. An estimate (neighbours outside the
 // block are missed), so that the encoder does not rank every node of a
 // large depth to learn that ranking does not pay (a million random points:
-// 12 times the plain coder's time without it).
-bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q) {
+// 12 times the plain coder's time without it). Coder 3's ranking, or
+// coder 2's unless `causal`.
+bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q, bool causal) {
   constexpr std::size_t kBlock = 8192;
   const std::size_t n = nodes.size();
   if (n <= 2 * kBlock) return true;
@@ -353,52 +382,53 @@ bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupan
   const std::vector<std::uint64_t> block(nodes.begin() + static_cast<std::ptrdiff_t>(b0),
                                          nodes.begin() + static_cast<std::ptrdiff_t>(b0 + kBlock));
   const DepthNodes depth(block, d, q);
+  const std::uint8_t* decoded = causal ? level.occupancy.data() + b0 : nullptr;
   std::vector<std::uint64_t> plain(256, 0), ranked(255, 0);
   int context = 0;
   for (std::size_t i = kBlock / 4; i < 3 * kBlock / 4; ++i) {
     const unsigned o = level.occupancy[b0 + i];
     ++plain[o];
-    ++ranked[depth.symbol(block[i], i, o, context)];
+    ++ranked[depth.symbol(block[i], i, o, decoded, context)];
   }
   return entropy_bits(ranked.data(), ranked.size()) < 0.995 * entropy_bits(plain.data(), plain.size());
 }
 
-// Coder 1 or 2 (written into `coder`), whichever is smaller: the ranked
-// symbols of every depth without and with its best gap weight.
+// Coder 3: at every depth, the ranked symbols for the gap weight and
+// ranking (plane or quadric) that make them cheapest. Coder 2 (the weight
+// alone, and the ranking of 8.3) unless `causal`.
 std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
-                                        int q, bool& any_ranked, std::uint8_t& coder) {
+                                        int q, bool& any_ranked, bool causal) {
+  constexpr std::size_t kChoices = 2 * kGapChoices.size();  // plane, then quadric, for each weight
   const auto sq = static_cast<std::size_t>(q);
-  std::vector<std::vector<std::uint8_t>> ranked_sym(sq), gap_sym(sq), context(sq);
+  std::vector<std::vector<std::uint8_t>> ranked_sym(sq), context(sq);
   std::vector<int> gaps(sq, 0);
+  std::vector<bool> quadric(sq, false);
   std::vector<std::uint8_t> all;
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     const auto nodes = nodes_at(keys, d, q);
     const auto& occ = levels[sd].occupancy;
-    if (!ranking_may_pay(nodes, levels[sd], d, q)) continue;
-    auto& sym = ranked_sym[sd];
+    if (!ranking_may_pay(nodes, levels[sd], d, q, causal)) continue;
     auto& ctx = context[sd];
-    sym.resize(occ.size());
     ctx.resize(occ.size());
-    all.resize(occ.size() * kGapChoices.size());
-    // Per weight, the symbols' counts in each of the 4 contexts.
-    std::vector<std::vector<std::uint64_t>> freq(kGapChoices.size(), std::vector<std::uint64_t>(4 * 255, 0));
+    all.resize(occ.size() * kChoices);
+    // Per choice, the symbols' counts in each of the 4 contexts.
+    std::vector<std::vector<std::uint64_t>> freq(kChoices, std::vector<std::uint64_t>(4 * 255, 0));
     const DepthNodes depth(nodes, d, q);
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       int c = 0;
-      const auto s = depth.symbols(nodes[i], i, occ[i], c);
+      const auto s = depth.symbols(nodes[i], i, occ[i], causal ? occ.data() : nullptr, c);
       ctx[i] = static_cast<std::uint8_t>(c);
-      sym[i] = s[0];
       for (std::size_t g = 0; g < s.size(); ++g) {
         all[i * s.size() + g] = s[g];
         ++freq[g][static_cast<std::size_t>(c) * 255 + s[g]];
       }
     }
-    // The weight whose symbols cost the fewest bits, tables included, with
+    // The choice whose symbols cost the fewest bits, tables included, with
     // the 4 contexts merged into 1, 2 or 4 as write_ranked may merge them.
     std::size_t chosen = 0;
     double least = 0;
-    for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
+    for (std::size_t g = 0; g < (causal ? kChoices : kGapChoices.size()); ++g) {
       double bits = 0;
       for (std::size_t classes : {1, 2, 4}) {
         std::vector<std::vector<std::uint64_t>> merged(classes, std::vector<std::uint64_t>(255, 0));
@@ -408,20 +438,18 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
       }
       if (g == 0 || bits < least) least = bits, chosen = g;
     }
-    gaps[sd] = kGapChoices[chosen];
-    gap_sym[sd].resize(occ.size());
-    for (std::size_t i = 0; i < nodes.size(); ++i) gap_sym[sd][i] = all[i * kGapChoices.size() + chosen];
+    gaps[sd] = kGapChoices[chosen % kGapChoices.size()];
+    quadric[sd] = chosen >= kGapChoices.size();
+    ranked_sym[sd].resize(occ.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i) ranked_sym[sd][i] = all[i * kChoices + chosen];
   }
-  // 1, 2 or 4 contexts, coder 1 or 2: the smallest stream.
+  // 1, 2 or 4 contexts: the smallest stream.
   std::vector<std::uint8_t> best;
-  for (const bool with_gaps : {false, true})
-    for (int classes : {1, 2, 4}) {
-      bool any = false;
-      auto bytes = with_gaps ? write_ranked(levels, q, classes, gap_sym, context, any, &gaps)
-                             : write_ranked(levels, q, classes, ranked_sym, context, any);
-      if (best.empty() || bytes.size() < best.size())
-        best = std::move(bytes), any_ranked = any, coder = with_gaps ? kGapCoder : kRankedCoder;
-    }
+  for (int classes : {1, 2, 4}) {
+    bool any = false;
+    auto bytes = write_ranked(levels, q, classes, ranked_sym, context, any, gaps, quadric, causal);
+    if (best.empty() || bytes.size() < best.size()) best = std::move(bytes), any_ranked = any;
+  }
   return best;
 }
 
@@ -438,11 +466,14 @@ constexpr std::array<std::uint8_t, 256> kChildCount = [] {
 // codes[d][j]: the table of depth d for context j (one at plain depths).
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,
-                                    int neighbours, const std::vector<int>& gaps) {
+                                    int neighbours, const std::vector<int>& gaps, bool causal = false,
+                                    const std::vector<bool>& quadric = {}) {
   std::vector<std::uint64_t> nodes{0}, next;
+  std::vector<std::uint8_t> occupancies;  // coder 3: the depth's occupancies so far
   std::array<int, 8> order{};
   for (int d = 0; d < q; ++d) {
     next.clear();
+    occupancies.clear();
     next.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(n, 8 * std::uint64_t{nodes.size()})));
     const auto& table = codes[static_cast<std::size_t>(d)];
     std::optional<DepthNodes> depth;
@@ -450,7 +481,9 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       std::uint32_t occ = 0;
       if (depth) {
-        const int context = depth->rank(nodes[i], i, neighbours, order, gaps[static_cast<std::size_t>(d)]);
+        const int context = depth->rank(nodes[i], i, neighbours, order, gaps[static_cast<std::size_t>(d)],
+                                        causal ? occupancies.data() : nullptr,
+                                        causal && quadric[static_cast<std::size_t>(d)]);
         const std::uint32_t s = table[std::min<std::size_t>(static_cast<std::size_t>(context), table.size() - 1)].decode(in);
         occ = occupancy_of(order, s);
       } else if ((occ = table[0].decode(in)) == 0) {
@@ -458,6 +491,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
       }
       if (next.size() + kChildCount[occ & 255u] > n)
         fail(Status::bad_layer, "BASE octree: more than the declared " + std::to_string(n) + " points");
+      if (causal) occupancies.push_back(static_cast<std::uint8_t>(occ));
       const std::uint64_t first = nodes[i] << 3;
       for (; occ != 0; occ &= occ - 1) next.push_back(first | static_cast<std::uint32_t>(__builtin_ctz(occ)));
     }
@@ -470,18 +504,21 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
   return canonical_from_morton(nodes, q, next);  // next: spare capacity for the sort
 }
 
-// Coder 1, or coder 2 (`with_gaps`: a gap weight per ranked depth).
+// Coder 1, 2 (a gap weight per ranked depth) or 3 (a gap weight and a
+// quadric flag per ranked depth, and the causal points).
 std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form,
-                                     bool with_gaps) {
+                                     std::uint8_t coder) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
   std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
   std::vector<bool> ranked;
   std::vector<int> gaps(static_cast<std::size_t>(q), 0);
+  std::vector<bool> quadric(static_cast<std::size_t>(q), false);
   for (int d = 0; d < q; ++d) {
     ranked.push_back(in.get(1) == 1);
-    if (ranked.back() && with_gaps) gaps[static_cast<std::size_t>(d)] = static_cast<int>(in.get(4));
+    if (ranked.back() && coder >= kGapCoder) gaps[static_cast<std::size_t>(d)] = static_cast<int>(in.get(4));
+    if (ranked.back() && coder == kCausalCoder) quadric[static_cast<std::size_t>(d)] = in.get(1) == 1;
     const std::string what = "BASE ranked octree table for depth " + std::to_string(d);
     if (!ranked.back()) {
       codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, what, form));
@@ -495,22 +532,23 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
         fail(Status::bad_layer, what + " context " + std::to_string(j) + ": a one-symbol code at a ranked depth");
     }
   }
-  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps);
+  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps, coder == kCausalCoder, quadric);
 }
 
 }  // namespace
 
-std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q) {
+std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder) {
+  if (ranked_coder != kGapCoder && ranked_coder != kCausalCoder)
+    fail(Status::invalid_argument, "BASE: the encoder writes ranked coders 2 and 3 only");
   const auto keys = sorted_keys(points, q);
   const auto levels = occupancies(keys, q);
   auto plain = write_octree(levels, q);
   bool any_ranked = false;
-  std::uint8_t ranked_coder = kRankedCoder;
-  auto ranked = encode_ranked(levels, keys, q, any_ranked, ranked_coder);
+  auto ranked = encode_ranked(levels, keys, q, any_ranked, ranked_coder == kCausalCoder);
   std::vector<std::uint8_t> out;
-  // Coder 1 only when it saves 1% of the layer: its searches cost decoding
-  // time (on a million random points in a ball it saves 0.05% and makes
-  // points-only decoding 25% slower).
+  // Coder 3 only when it saves 1% of the layer: its searches cost decoding
+  // time (measured with coder 1: on a million random points in a ball it
+  // saved 0.05% and made points-only decoding 25% slower).
   const bool use_ranked = any_ranked && 100 * ranked.size() < 99 * plain.size();
   out.push_back(use_ranked ? ranked_coder : kPlainCoder);
   const auto& body = use_ranked ? ranked : plain;
@@ -521,8 +559,8 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
   if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n, form);
-  if (data[0] == kRankedCoder || data[0] == kGapCoder)
-    return decode_ranked(data + 1, size - 1, q, n, form, data[0] == kGapCoder);
+  if (data[0] == kRankedCoder || data[0] == kGapCoder || data[0] == kCausalCoder)
+    return decode_ranked(data + 1, size - 1, q, n, form, data[0]);
   fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
 }
 
