@@ -333,23 +333,6 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
-def causal_points(nodes, occs, i, nb, neighbours, h):
-    """§8.4: the points that rank node i of a depth (doubled coordinates):
-    its neighbours' centres, those decoded before it (index below i, whose
-    occupancies occs[j] are known) replaced by their occupied children's
-    centres; 32 at most."""
-    P = []
-    X, Y, Z = nodes[i]
-    for j in nb.nearest((2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h), min(neighbours, len(nodes))):
-        if j < i:
-            Xj, Yj, Zj = nodes[j]
-            P += [((2 * Xj + (c >> 2)) * h + h // 2, (2 * Yj + ((c >> 1) & 1)) * h + h // 2,
-                   (2 * Zj + (c & 1)) * h + h // 2) for c in range(8) if occs[j] >> c & 1]
-        else:
-            P.append(nb.pts[j])
-    return P[:32]
-
-
 def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None):
     """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
     (refdec.child_order over the node centres of each depth); ranked[d]
@@ -368,7 +351,7 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
         row = []
         for i, node in enumerate(nodes):
             if quadric is not None:
-                P = causal_points(nodes, occs, i, nb, neighbours, h)
+                P = refdec.causal_points(nodes, occs, i, nb, neighbours, h)
                 pi, split = refdec.child_order(node, d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
                                                fit=len(P) if quadric[d] else 0, points=P)
             else:

@@ -255,6 +255,24 @@ def morton_children(node, d, q):
     return [(c, (2 * X + (c >> 2), 2 * Y + ((c >> 1) & 1), 2 * Z + (c & 1))) for c in range(8)]
 
 
+def causal_points(nodes, occs, i, nb, neighbours, h):
+    """§8.4: the points that rank node i of a depth (doubled coordinates;
+    nb searches the depth's node centres, h is the node side): its
+    neighbours' centres, those decoded before it (index below i, whose
+    occupancies occs[j] are known) replaced by their occupied children's
+    centres; 32 at most."""
+    P = []
+    X, Y, Z = nodes[i]
+    for j in nb.nearest((2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h), min(neighbours, len(nodes))):
+        if j < i:
+            Xj, Yj, Zj = nodes[j]
+            P += [((2 * Xj + (c >> 2)) * h + h // 2, (2 * Yj + ((c >> 1) & 1)) * h + h // 2,
+                   (2 * Zj + (c & 1)) * h + h // 2) for c in range(8) if occs[j] >> c & 1]
+        else:
+            P.append(nb.pts[j])
+    return P[:32]
+
+
 def decode_base(payload, q, n, form=1):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
@@ -284,17 +302,7 @@ def decode_base(payload, q, n, form=1):
         occs = []
         for i, (X, Y, Z) in enumerate(nodes):
             if ranked[d] and coder == 3:
-                # §8.4: neighbours decoded before the node stand for their
-                # occupied children's centres; 32 points at most
-                P = []
-                for j in nb.nearest((2 * X * h + h, 2 * Y * h + h, 2 * Z * h + h), min(neighbours, len(nodes))):
-                    if j < i:
-                        Xj, Yj, Zj = nodes[j]
-                        P += [((2 * Xj + (c >> 2)) * h + h // 2, (2 * Yj + ((c >> 1) & 1)) * h + h // 2,
-                               (2 * Zj + (c & 1)) * h + h // 2) for c in range(8) if occs[j] >> c & 1]
-                    else:
-                        P.append(nb.pts[j])
-                P = P[:32]
+                P = causal_points(nodes, occs, i, nb, neighbours, h)
                 pi, split = child_order((X, Y, Z), d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
                                         fit=len(P) if quadric[d] else 0, points=P)
             elif ranked[d]:
