@@ -226,6 +226,14 @@ class DepthNodes {
   /// its occupied children; `quadric`: rank by the quadric through them all.
   ChildKeys keys(std::uint64_t node, std::size_t i, int neighbours, bool with_gaps, int& context,
                  const std::uint8_t* causal = nullptr, bool quadric = false) const {
+    std::array<Doubled, kCausalPoints> nb{};
+    const int count = points(i, neighbours, causal, nb);
+    return keys_of(node, nb, count, with_gaps, quadric, context);
+  }
+
+  /// The points that rank node i's children (spec 8.2; 8.4 with `causal`)
+  /// into `nb`; returns their number.
+  int points(std::size_t i, int neighbours, const std::uint8_t* causal, std::array<Doubled, kCausalPoints>& nb) const {
     const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
     std::array<std::uint32_t, kMaxNeighbours> near{};
     int found = lattice_ ? lattice_->nearest(i, k, near.data()) : -1;
@@ -235,7 +243,6 @@ class DepthNodes {
       found = tree_->nearest(centres_[i], k, hits.data());
       for (int j = 0; j < found; ++j) near[static_cast<std::size_t>(j)] = hits[static_cast<std::size_t>(j)].index;
     }
-    std::array<Doubled, kCausalPoints> nb{};
     int count = 0;
     const std::int64_t h = std::int64_t{1} << (q_ - d_);
     for (int j = 0; j < found && count < kCausalPoints; ++j) {
@@ -254,6 +261,12 @@ class DepthNodes {
       nb[static_cast<std::size_t>(count++)] = {static_cast<std::int32_t>(c[0]), static_cast<std::int32_t>(c[1]),
                                                static_cast<std::int32_t>(c[2])};
     }
+    return count;
+  }
+
+  /// The keys of a node ranked by the points nb[0 .. count), with its context.
+  ChildKeys keys_of(std::uint64_t node, const std::array<Doubled, kCausalPoints>& nb, int count, bool with_gaps,
+                    bool quadric, int& context) const {
     ChildKeys out(morton_point(node, d_), d_, q_, nb.data(), count, with_gaps, 1, quadric ? count : 0);
     const int split = out.split();
     context = split <= 1 ? split : split <= 3 ? 2 : 3;
@@ -261,8 +274,9 @@ class DepthNodes {
   }
 
   /// Coder 3's ranked occupancy of node i (its index in E, spec 8.2) for
-  /// the occupancy `occupancy`, plane ranking and no gap weight; `causal`
-  /// as for keys(); `context` receives the node's context.
+  /// the occupancy `occupancy`, plane ranking and no gap weight (coder 1's
+  /// when `causal` is null); `causal` as for keys(); `context` receives the
+  /// node's context.
   std::uint8_t symbol(std::uint64_t node, std::size_t i, unsigned occupancy, const std::uint8_t* causal,
                       int& context) const {
     std::array<int, 8> order{};
@@ -278,9 +292,11 @@ class DepthNodes {
                                                            int& context) const {
     std::array<std::uint8_t, 2 * kGapChoices.size()> out{};
     std::array<int, 8> order{};
+    std::array<Doubled, kCausalPoints> nb{};
+    const int count = points(i, neighbours, causal, nb);
     for (const bool quadric : {false, true}) {
       if (quadric && !causal) break;
-      const ChildKeys k = keys(node, i, neighbours, true, context, causal, quadric);
+      const ChildKeys k = keys_of(node, nb, count, true, quadric, context);
       for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
         k.order(0u, kGapChoices[g], order);
         out[(quadric ? kGapChoices.size() : 0) + g] = ranked_symbol(order, occupancy);
