@@ -585,6 +585,31 @@ std::vector<RankedDepth> ranked_depths(const std::vector<std::uint8_t>& base, in
   return out;
 }
 
+// The candidates, in their order, that lie at least r from every one kept
+// before them: points spaced about evenly, as a scan spaces them.
+Points evenly_spread(const Points& candidates, std::int64_t r) {
+  Points even;
+  const auto side = static_cast<std::uint32_t>(r);  // buckets of side r: the spacing test stays local
+  std::map<std::array<std::uint32_t, 3>, std::vector<GridPoint>> grid;
+  for (const GridPoint& c : candidates) {
+    const std::array<std::uint32_t, 3> cell{c[0] / side, c[1] / side, c[2] / side};
+    bool near = false;
+    for (int dx = -1; dx <= 1 && !near; ++dx)
+      for (int dy = -1; dy <= 1 && !near; ++dy)
+        for (int dz = -1; dz <= 1 && !near; ++dz) {
+          const auto it = grid.find({cell[0] + dx, cell[1] + dy, cell[2] + dz});
+          if (it == grid.end()) continue;
+          for (const GridPoint& p : it->second) {
+            std::int64_t d2 = 0;
+            for (std::size_t a = 0; a < 3; ++a) d2 += (std::int64_t{p[a]} - c[a]) * (std::int64_t{p[a]} - c[a]);
+            near = near || d2 < r * r;
+          }
+        }
+    if (!near) grid[cell].push_back(c), even.push_back(c);
+  }
+  return even;
+}
+
 TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before, and by a quadric where it pays") {
   // On sampled curved surfaces the occupied children of the neighbouring
   // nodes already decoded locate the sheet twice as finely as their centres:
@@ -614,6 +639,20 @@ TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before
     }
     CHECK(!same);
   }
+  // A depth of more than 16,384 nodes is first judged on a sample block of
+  // its nodes (their causal points taken from the block's own slice of the
+  // occupancies): on 50,000 evenly spaced points of a sphere the last depth
+  // (one point per node) pays and must be ranked. (The bunny's last depth
+  // pays only with the weights or the quadric, which the sample now tries;
+  // these synthetic points pay with the plane alone too.)
+  {
+    const Points big = sorted(evenly_spread(quantize(samples::random_sphere_points(100000, 9), 12), 19));
+    REQUIRE(big.size() > 40000);
+    const auto b = encode_base(big, 12);
+    const auto depths = ranked_depths(b, 12);
+    MESSAGE(big.size() << " evenly spread points: " << b.size() << " bytes");
+    CHECK(depths[11].ranked);
+  }
   // The points of a node are capped at 32: with 15 neighbours on a dense
   // lattice (up to 8 children each) the lists are cut, and the set still
   // comes back; the same at q = 21 with points at the grid's far corners
@@ -641,29 +680,7 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
   // depths of one or two points per node, the occupied children lie far from
   // the neighbouring nodes' centres, and weights above 0 make the symbols
   // cheaper.
-  const Points candidates = quantize(samples::random_sphere_points(30000, 7), 12);
-  Points even;
-  {
-    std::set<std::array<std::uint32_t, 3>> cells;  // buckets of 64 grid units: the spacing test stays local
-    std::map<std::array<std::uint32_t, 3>, std::vector<GridPoint>> grid;
-    const std::int64_t r = 40;
-    for (const GridPoint& c : candidates) {
-      const std::array<std::uint32_t, 3> cell{c[0] / 64, c[1] / 64, c[2] / 64};
-      bool near = false;
-      for (int dx = -1; dx <= 1 && !near; ++dx)
-        for (int dy = -1; dy <= 1 && !near; ++dy)
-          for (int dz = -1; dz <= 1 && !near; ++dz) {
-            const auto it = grid.find({cell[0] + dx, cell[1] + dy, cell[2] + dz});
-            if (it == grid.end()) continue;
-            for (const GridPoint& p : it->second) {
-              std::int64_t d2 = 0;
-              for (std::size_t a = 0; a < 3; ++a) d2 += (std::int64_t{p[a]} - c[a]) * (std::int64_t{p[a]} - c[a]);
-              near = near || d2 < r * r;
-            }
-          }
-      if (!near) grid[cell].push_back(c), even.push_back(c);
-    }
-  }
+  Points even = evenly_spread(quantize(samples::random_sphere_points(30000, 7), 12), 40);
   sort_canonical(even);
   REQUIRE(even.size() > 2000);
   const auto base = encode_base(even, 12, 2);
