@@ -174,7 +174,7 @@ constexpr int kMaxNeighbours = 15;  // 4-bit field
 // coder 3 both (15 suits surfaces, whose nodes then take more decoded
 // children into their points; 10 the interiors of volumes).
 constexpr std::array<int, 2> kBaseNeighbours{10, 15};
-constexpr int kCausalPoints = 32;    // coder 3: the most points a node is ranked by (spec 8.4)
+constexpr int kCausalPoints = kMaxRankPoints;  // coder 3: the most points a node is ranked by (spec 8.4)
 
 // The nodes of one depth in Morton order, with the centres of their cells
 // in doubled grid coordinates, and their nearest neighbours: looked up in a
@@ -428,7 +428,8 @@ constexpr std::size_t kChoices = 2 * kGapChoices.size();  // plane, then quadric
 std::size_t cheapest_choice(const std::vector<std::uint8_t>& all, const std::vector<std::uint8_t>& ctx, bool causal) {
   std::vector<std::vector<std::uint64_t>> freq(kChoices, std::vector<std::uint64_t>(4 * 255, 0));
   for (std::size_t i = 0; i < ctx.size(); ++i)
-    for (std::size_t g = 0; g < kChoices; ++g) ++freq[g][static_cast<std::size_t>(ctx[i]) * 255 + all[i * kChoices + g]];
+    for (std::size_t g = 0; g < kChoices; ++g)
+      ++freq[g][static_cast<std::size_t>(ctx[i]) * 255 + all[i * kChoices + g]];
   std::size_t chosen = 0;
   double least = 0;
   for (std::size_t g = 0; g < (causal ? kChoices : kGapChoices.size()); ++g) {

@@ -45,9 +45,6 @@ void reduce(std::array<std::int64_t, N>& v, int bits) {
   for (std::int64_t& x : v) x = x < 0 ? -((-x) >> s) : x >> s;
 }
 
-// The most points a quadric is fitted to (spec 8.4: 32; 8A.6: 15).
-constexpr int kMaxFitPoints = 32;
-
 // Coordinates of a point relative to the node's centre in the frame of
 // spec 8A.6: u and v along e_a x n and e_b x n (a < b the axes other than
 // the normal's dominant axis j), both perpendicular to n, and the height w
@@ -86,7 +83,7 @@ bool fit_quadric(const Doubled* neighbours, int f, const std::array<std::int64_t
   // accumulated over the points in order in a register of its own (the
   // same additions in the same order as point by point, without a chain
   // through memory).
-  std::array<std::array<double, 7>, kMaxFitPoints> beta;
+  std::array<std::array<double, 7>, kMaxRankPoints> beta;
   for (int i = 0; i < f; ++i) {
     const auto p = frame.of({neighbours[i][0] - o[0], neighbours[i][1] - o[1], neighbours[i][2] - o[2]});
     const double u = p[0], v = p[1];
@@ -96,7 +93,7 @@ bool fit_quadric(const Doubled* neighbours, int f, const std::array<std::int64_t
   for (std::size_t x = 0; x < 6; ++x) {
     for (std::size_t y = x; y < 7; ++y) {
       double acc = 0.0;
-      for (int i = 0; i < f; ++i) acc = acc + beta[static_cast<std::size_t>(i)][x] * beta[static_cast<std::size_t>(i)][y];
+      for (std::size_t i = 0; i < static_cast<std::size_t>(f); ++i) acc = acc + beta[i][x] * beta[i][y];
       if (y < 6) m[x][y] = acc;
       else r[x] = acc;
     }
@@ -178,7 +175,7 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   // times a distance along the normal), truncated, at most 2^47.
   const Frame frame = frame_of(n, j);
   std::array<double, 6> coef{};
-  if (fit >= 6 && fit <= kMaxFitPoints && n[j] > 0 &&
+  if (fit >= 6 && fit <= kMaxRankPoints && n[j] > 0 &&
       fit_quadric(neighbours, fit, {2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h,
                                     2 * std::int64_t{p[2]} * h + h}, frame, coef)) {
     for (std::size_t c = 0; c < 8; ++c) {

@@ -45,6 +45,10 @@ int popcount8(unsigned v);
 /// Point in doubled grid coordinates (below 2^22).
 using Doubled = std::array<std::int32_t, 3>;
 
+/// The most points a node's children are ranked by: the cap of the base
+/// coder's causal points (spec 8.4), above the refinement coders' 15.
+inline constexpr int kMaxRankPoints = 32;
+
 /// The keys that rank a node's children (spec 8A.1 steps 2–4, and 8A.4's
 /// distances to the nearest neighbour when `with_gaps`), computed once so
 /// that the encoder can rank the children for several gap weights.
@@ -54,7 +58,8 @@ class ChildKeys {
   /// gap_from neighbours (the base coder's node itself, spec 8.3). `fit`
   /// (spec 8A.6): when 6 or more, the plane distances give way to distances
   /// from the quadric fitted to the first `fit` neighbours (where that fit
-  /// is well posed); `neighbours` then holds max(k, fit) points, of which
+  /// is well posed; `fit` is at most kMaxRankPoints, and a larger one fits
+  /// nothing); `neighbours` then holds max(k, fit) points, of which
   /// the plane and the gaps use the first k.
   ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps, int gap_from = 0,
             int fit = 0);
