@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x10"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x11"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -294,6 +294,42 @@ class Coder:
             bw.put(c, l)
 
 
+class PairedCoder:
+    """§7.4: a paired table for the symbols `sequence`, in their order of
+    use; an odd sequence's last pair takes 0 as its second symbol."""
+
+    def __init__(self, sequence, alphabet, tail=0):
+        self.sequence = list(sequence)
+        self.alphabet = alphabet
+        self.pairs = []
+        for i in range(0, len(self.sequence), 2):
+            a = self.sequence[i]
+            b = self.sequence[i + 1] if i + 1 < len(self.sequence) else tail
+            self.pairs.append((a, b))
+        self.pair_syms = [a * 8 + b if a < 8 and b < 8 else 64 for a, b in self.pairs]
+        escaped = [v for (a, b), p in zip(self.pairs, self.pair_syms) if p == 64 for v in (a, b)]
+        self.pair_coder = Coder(self.pair_syms, 65)
+        self.escape = Coder(escaped, alphabet) if escaped else None
+        self.next = 0
+
+    def table(self, bw):
+        self.pair_coder.table(bw)
+        if self.escape is not None:
+            self.escape.table(bw)
+
+    def put(self, bw, s):
+        i = self.next
+        assert self.sequence[i] == s
+        self.next += 1
+        if i % 2:
+            return  # the second symbol of a pair: already sent
+        self.pair_coder.put(bw, self.pair_syms[i // 2])
+        if self.pair_syms[i // 2] == 64:
+            a, b = self.pairs[i // 2]
+            self.escape.put(bw, a)
+            self.escape.put(bw, b)
+
+
 # ---------------------------------------------------------------- hand-built layers and chunks
 
 
@@ -395,12 +431,18 @@ def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, q
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
 
-def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None, fit=None):
+def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None, fit=None,
+                 paired=None, merge=False, tail=0):
     """§8A.1 conditional octree coder (planes = 2: coder 2, §8A.3, with the
     plane context; gap not None: coder 3, §8A.4, with that weight and planes
     1 or 2, or, a list of q weights, coder 4, §8A.5; fit not None: coder 5,
     §8A.6, with that F and gap one weight or a list), written from the
-    decoder's ranking (refdec.child_order).
+    decoder's ranking (refdec.child_order). paired not None: coder 6,
+    §8A.7, with the header of coder 5 (F = fit or 0), and paired(d, j) says
+    whether the table sent at depth d for slot j = (class, plane context) is
+    paired (§7.4). merge: each slot sends one table, at its first depth with
+    symbols, which the deeper depths share. tail: the unused second symbol
+    of an odd paired sequence's last pair.
     coarse: C in canonical order; added: A."""
     coarse = sorted(coarse)
     occ = [set() for _ in range(q + 1)]
@@ -434,6 +476,8 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     bw = BitWriter()
     bw.put(neighbours, 4)
     bw.put(classes - 1, 2)
+    if paired is not None and fit is None:
+        fit = 0
     if fit is not None or gap is not None:
         bw.put(planes - 1, 1)
         if fit is not None:
@@ -446,7 +490,9 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
         prev = None
         for d in range(q):
             syms = [s for (dd, jj, s) in seq if dd == d and jj == j]
-            if syms or force_tables or (prev is None and not share):
+            if merge and syms and prev is not None:
+                coder[(d, j)] = None  # the slot's one table serves this depth too
+            elif syms or force_tables or (prev is None and not share):
                 # a table of its own (flag 1); unused slots get a two-symbol code
                 c = Coder(syms if syms else [0, 1], 255)
                 coder[(d, j)] = c
@@ -455,24 +501,46 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
                 coder[(d, j)] = None  # marks "inherit" (flag 0)
             else:
                 coder[(d, j)] = False  # flag 0 at depth 0: none
+    def tables_in_use():
+        """The table each slot decodes with: its own, or the one above."""
+        current = {}
+        for j in slots:
+            for d in range(q):
+                if coder[(d, j)]:
+                    current[(d, j)] = coder[(d, j)]
+                elif d > 0 and (d - 1, j) in current:
+                    current[(d, j)] = current[(d - 1, j)]
+        return current
+
+    current = tables_in_use()
+    if merge or paired is not None:
+        # Codes from every symbol a table codes (merge), paired where asked.
+        uses = {}
+        for (d, j, s) in seq:
+            uses.setdefault(id(current[(d, j)]), []).append(s)
+        for d in range(q):
+            for j in slots:
+                c = coder[(d, j)]
+                if c:
+                    sequence = uses.get(id(c), [])
+                    if paired is not None and paired(d, j) and sequence:
+                        coder[(d, j)] = PairedCoder(sequence, 255, tail)
+                    elif merge and sequence:
+                        coder[(d, j)] = Coder(sequence, 255)
+        current = tables_in_use()
     for d in range(q):
         for j in slots:
             c = coder[(d, j)]
             if c:
                 bw.put(1, 1)
+                if paired is not None:
+                    bw.put(1 if isinstance(c, PairedCoder) else 0, 1)
                 c.table(bw)
             else:
                 bw.put(0, 1)
-    current = {}
-    for j in slots:
-        for d in range(q):
-            if coder[(d, j)]:
-                current[(d, j)] = coder[(d, j)]
-            elif d > 0 and (d - 1, j) in current:
-                current[(d, j)] = current[(d - 1, j)]
     for (d, j, s) in seq:
         current[(d, j)].put(bw, s)
-    coder = 5 if fit is not None else 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
+    coder = 6 if paired is not None else 5 if fit is not None else 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
     return bytes([coder]) + bw.bytes()
 
 
@@ -615,7 +683,7 @@ def describe_refn(payload):
         br = refdec.BitReader(payload, 1, "bad_layer", "REFN")
         return {"coder": 1, "residual_step": br.ue()}
     b = payload[1]
-    return {"coder": 0, "neighbours": b >> 4, "classes": ((b >> 2) & 3) + 1}
+    return {"coder": payload[0], "neighbours": b >> 4, "classes": ((b >> 2) & 3) + 1}
 
 
 def describe(data):
@@ -1034,8 +1102,9 @@ def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), 
         planes = refn_opts[i - 1][3] if len(refn_opts[i - 1]) > 3 else 1
         gap = refn_opts[i - 1][4] if len(refn_opts[i - 1]) > 4 else None
         fit = refn_opts[i - 1][5] if len(refn_opts[i - 1]) > 5 else None
+        paired, merge, tail = (tuple(refn_opts[i - 1][6:9]) + (None, False, 0)[len(refn_opts[i - 1][6:9]):])
         ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes, gap=gap,
-                                        fit=fit)])
+                                        fit=fit, paired=paired, merge=merge, tail=tail)])
         if rcons:
             ch.append(["RCON", rcons[i]])
     ch.append(["HEND", b""])
@@ -1204,6 +1273,27 @@ def hb_refn_quadric():
     lv = nested(sorted(set(grid)), [60, 150, 256], 104)
     b = hand_stream(0, 6, lv, [(4, 2, True, 2, 2, 10), (4, 1, True, 1, [0, 4, 8, 1, 0, 2], 6)])
     return a, b
+
+
+def hb_refn_paired():
+    # REFN coder 6 (paired tables). On a sphere: every table paired, one
+    # table per slot shared by all its depths (pending symbols carried from
+    # one depth to the next), escapes where nodes hold several points, the
+    # quadric with plane contexts; then tables paired at alternate depths and
+    # classes, a weight per depth, no quadric (F = 0). At q = 3 with
+    # neighbours 0: many escapes. An odd sequence whose unused last symbol is
+    # 5 instead of the encoder's 0 (decoders ignore it). A layer whose every
+    # pair is the same: the pair code's one-symbol form (no bits per pair).
+    pts = sphere_pts(500, 10, 111)
+    lv = nested(pts, [70, 200, 500], 112)
+    all_tables = lambda d, j: True
+    a = hand_stream(0, 10, lv, [(4, 2, True, 2, 6, 10, all_tables, True),
+                                (4, 3, True, 1, [0, 1, 2, 3, 4, 6, 8, 12, 15, 5], 0,
+                                 lambda d, j: (d + j[0]) % 2 == 0)])
+    lv = nested(rand_pts(120, 3, 113), [20, 60, 120], 114)
+    b = hand_stream(0, 3, lv, [(0, 1, True, 1, None, None, all_tables, True, 5), (2, 2, False, 1, 3, None, all_tables)])
+    c = hand_stream(0, 2, [[(0, 0, 0)], [(0, 0, 0), (3, 3, 3)]], [(1, 1, True, 1, None, None, all_tables)])
+    return a, b, c
 
 
 def hb_base_gaps():
@@ -1406,6 +1496,12 @@ HANDBUILT = [
      "REFN coder 5 (quadric ranking) on a sphere: F = 10 with G = 6, plane contexts, 3 classes; F = 15 with a weight per depth, 2 classes, unshared tables; F = 5 (no quadric: coder 4's ranking); neighbours 1 with F = 8 (no plane normal, no quadric)", sec("refn", "huff")),
     ("refn-quadric-lattice", lambda: hb_refn_quadric()[1], P,
      "REFN coder 5 on lattice points plus random ones: F = 10 and 6 with neighbours 4, fits that fail (points on few planes and conics) and equal keys", sec("refn", "huff")),
+    ("refn-paired", lambda: hb_refn_paired()[0], P,
+     "REFN coder 6 (paired tables) on a sphere: every table paired and shared by all the depths of its slot (pending symbols carried across depths), escapes, the quadric with plane contexts; then tables paired at alternate depths and classes with a weight per depth and F = 0", sec("refn", "huff")),
+    ("refn-paired-escapes", lambda: hb_refn_paired()[1], P,
+     "REFN coder 6 at q = 3: neighbours 0 with every table paired and shared across depths, many escaped pairs, an odd sequence whose unused last symbol is 5 (not the encoder's 0); neighbours 2 with G = 3, unshared tables", sec("refn", "huff")),
+    ("refn-paired-single", lambda: hb_refn_paired()[2], P,
+     "REFN coder 6 at q = 2 adding one point: each paired table's pair code is the one-symbol form, and the layer's symbols cost no bits", sec("refn", "huff")),
     ("base-gaps", lambda: hb_base_gaps()[0], P,
      "BASE coder 2 (gap weights): points near a sphere on a lattice (ties), neighbours 10, depth 0 plain, weights 15, 3 and 8 at the ranked depths, 3 contexts", sec("base", "huff")),
     ("base-gaps-neighbours-1", lambda: hb_base_gaps()[1], P,
@@ -1672,8 +1768,11 @@ NEGATIVE = [
      lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
     ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
-    ("neg-refn-coder", "bad_layer", P, "REFN coder 6", ["8A", "13"],
-     lambda: stream_q1_refn(b"\x06" + refn_single(0)[1:])),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 7", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x07" + refn_single(0)[1:])),
+    ("neg-refn-paired-cut", "bad_layer", P, "REFN coder 6 whose payload ends inside the escape code of a paired table (its pair code can give the escape)", ["7.4", "8A.7", "13"],
+     lambda: stream_q1_refn(b"\x06" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(0, 1),
+                                                                 bw.put(0, 4), bw.put(1, 1), bw.put(1, 1), bw.put(1, 1), bw.put(64, 7), bw.put(0, 1))))),
     ("neg-refn-quadric-cut", "bad_layer", P, "REFN coder 5 whose payload ends inside the fit field (one data byte: neighbours, classes, planes and one bit of F)", ["8A.6", "13"],
      lambda: stream_q1_refn(b"\x05" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1))))),
     ("neg-refn-depth-gaps-cut", "bad_layer", P, "REFN coder 4 at q = 1 whose payload ends inside the weight of depth 0 (one data byte: neighbours, classes, planes and one bit of G_0)", ["8A.5", "13"],

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: AGPL-3.0-or-later
 """refdec: a second, independent HMC decoder, written from spec/hmc.md alone.
 
-It decodes the points of every level (refinement coders 0 and 1) and parses
+It decodes the points of every level (every base and refinement coder) and parses
 and validates all side information (HEAD, SQNT, VQTB, BASE, REFN, RCON),
 but does not build the
 Delaunay tetrahedralization or reconstruct triangles and tetrahedra: it
@@ -176,6 +176,30 @@ class Code:
             if 0 <= off < self.count[l]:
                 return self.symbols[self.index[l] + off]
         raise DecodeError(cls, "no code matches (impossible for a complete code)")
+
+
+class PairedCode:
+    """§7.4: a paired table. Each pair (a, b) is read where its first symbol
+    is needed; b stays pending until the table is next used."""
+
+    def __init__(self, br, alphabet, form):
+        self.pairs = read_code(br, 65, form)
+        uses_escape = self.pairs.single == 64 if self.pairs.single is not None else 64 in self.pairs.symbols
+        self.escape = read_code(br, alphabet, form) if uses_escape else None
+        self.pending = None
+
+    def decode(self, br, cls):
+        if self.pending is not None:
+            s, self.pending = self.pending, None
+            return s
+        v = self.pairs.decode(br, cls)
+        if v < 64:
+            a, b = v // 8, v % 8
+        else:
+            a = self.escape.decode(br, cls)
+            b = self.escape.decode(br, cls)
+        self.pending = b
+        return a
 
 
 def read_delta_lengths(br, alphabet):
@@ -554,7 +578,7 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
         return decode_vq(payload, q, coarse, n, codebook, form)
-    if payload[0] not in (0, 2, 3, 4, 5):
+    if payload[0] not in (0, 2, 3, 4, 5, 6):
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     planes = 2 if payload[0] == 2 else 1  # §8A.3: coder 2 adds the plane context
     br = BitReader(payload, 1, "bad_layer", "REFN")
@@ -562,9 +586,9 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
     classes = br.bits(2) + 1
     gaps = [0] * q
     fit = 0
-    if payload[0] in (3, 4, 5):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
+    if payload[0] in (3, 4, 5, 6):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
         planes = br.bits(1) + 1
-        if payload[0] == 5:  # §8A.6: the quadric's fit points, then one weight or one per depth
+        if payload[0] in (5, 6):  # §8A.6, §8A.7: the quadric's fit points, then one weight or one per depth
             fit = br.bits(4)
             per_depth = br.bits(1) == 1
         else:
@@ -575,7 +599,10 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         for j in range(classes):
             for x in range(planes):
                 if br.bits(1) == 1:
-                    table[d][j][x] = read_code(br, 255, form)
+                    if payload[0] == 6 and br.bits(1) == 1:  # §8A.7: a paired table (§7.4)
+                        table[d][j][x] = PairedCode(br, 255, form)
+                    else:
+                        table[d][j][x] = read_code(br, 255, form)
                 elif d > 0:
                     table[d][j][x] = table[d - 1][j][x]
     # Occupied nodes of C per depth.

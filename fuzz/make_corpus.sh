@@ -65,10 +65,10 @@ done
 
 rm -rf "$CORPUS"
 mkdir -p "$CORPUS"
-python3 - "$WORK" "$CORPUS" <<'EOF'
+python3 - "$WORK" "$CORPUS" "$ROOT" <<'EOF'
 import glob, os, struct, sys, zlib
 
-work, corpus = sys.argv[1], sys.argv[2]
+work, corpus, root = sys.argv[1], sys.argv[2], sys.argv[3]
 MAX_FILE = 64 * 1024
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
 
@@ -289,8 +289,8 @@ for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
         if len(coarse) > 64:
             continue
         common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
-        if refn[0][0] in (0, 2, 3, 4, 5):  # the target's coder byte mod 5: 0 coder 0, 1 coder 2, 2 coder 3, 3 coder 4,
-            coder = bytes([{0: 0, 2: 1, 3: 2, 4: 3, 5: 4}[refn[0][0]]])  # 4 coder 5
+        if refn[0][0] in (0, 2, 3, 4, 5, 6):  # the target's coder byte mod 6: 0 coder 0, 1 coder 2, 2 coder 3,
+            coder = bytes([{0: 0, 2: 1, 3: 2, 4: 3, 5: 4, 6: 5}[refn[0][0]]])  # 3 coder 4, 4 coder 5, 5 coder 6
             put("refine_layer", name, common + (n - 1).to_bytes(2, "little") + coder + refn[0][1:])
         else:
             vqtb = next(p for t, p in cs if t == "VQTB")
@@ -307,6 +307,20 @@ for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
         pts = dump_points(os.path.join(dump, "level-0.points"))
         if 4 <= len(pts) <= 40:
             put("recon", name, bytes([1 if kind == 2 else 0, len(pts) - 4]) + bytes(v for p in pts for v in p) + rcon[-1])
+
+# Coder 6 (paired tables) from the conformance vectors: the small samples'
+# layers do not pair their tables.
+for case in ("refn-paired-escapes", "refn-paired-single"):
+    folder = os.path.join(root, "conformance", "vectors", case)
+    with open(os.path.join(folder, "stream.hmc"), "rb") as f:
+        cs = chunks(f.read())
+    q = next(p for t, p in cs if t == "SQNT")[0]
+    refn = [p for t, p in cs if t == "REFN"]
+    levels = len(refn) + 1
+    coarse = dump_points(os.path.join(folder, "expected", "level-%d.points" % (levels - 1)))
+    fine = dump_points(os.path.join(folder, "expected", "level-%d.points" % (levels - 2)))
+    common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
+    put("refine_layer", case, common + (len(fine) - len(coarse) - 1).to_bytes(2, "little") + bytes([5]) + refn[0][1:])
 
 # --- roundtrip: q - 1, flags, seed, then 12 bytes per point --------------
 def rt(q, flags, seed, coords, fmt):

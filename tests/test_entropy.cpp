@@ -7,6 +7,7 @@
 #include <random>
 
 #include "entropy/huffman.hpp"
+#include "entropy/paired.hpp"
 
 using namespace hmc;
 using namespace hmc::detail;
@@ -270,4 +271,130 @@ TEST_CASE("canonical codes are assigned by (length, symbol)") {
   REQUIRE(bytes.size() == 2);
   CHECK(bytes[0] == 0x5B);  // 0 10 110 11|1
   CHECK(bytes[1] == 0x80);
+}
+
+namespace {
+
+// Symbols 0 .. 7 with rank 0 of probability `p0` and the rest spread evenly,
+// and now and then a symbol above 7 (a node with several children).
+std::vector<std::uint32_t> skewed(std::size_t n, double p0, double escapes, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = u(rng);
+    out.push_back(x < escapes ? 8 + static_cast<std::uint32_t>(rng() % 247)
+                  : x < escapes + p0 ? 0u
+                                     : 1 + static_cast<std::uint32_t>(rng() % 7));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("paired tables (spec 7.4): tables and interleaved symbols round trip, and cost what paired_bits says") {
+  const std::vector<std::vector<std::uint32_t>> sequences{
+      skewed(1001, 0.9, 0.0, 1),  // odd: the last pair's second symbol is never used
+      skewed(500, 0.6, 0.05, 2),  // escapes
+      skewed(64, 0.3, 0.5, 3),    // mostly escapes
+      {5},                        // one symbol: one pair (5, 0)
+      std::vector<std::uint32_t>(40, 0),
+      {254, 254, 254},            // only escapes: a one-symbol pair code of the escape
+  };
+  for (bool paired : {false, true})
+    for (std::size_t first = 0; first < sequences.size(); ++first) {
+      CAPTURE(paired);
+      CAPTURE(first);
+      // Two tables whose uses interleave: each keeps its own pending symbol.
+      const auto& a = sequences[first];
+      const auto& b = sequences[(first + 1) % sequences.size()];
+      TableCode ta = TableCode::build(a, 255, paired), tb = TableCode::build(b, 255, paired);
+      BitWriter w;
+      ta.write(w, true, TableForm::deltas);
+      const std::uint64_t table_a = w.bit_count();
+      tb.write(w, true, TableForm::deltas);
+      const std::uint64_t tables = w.bit_count();
+      std::uint64_t bits_a = 0;
+      for (std::size_t i = 0, j = 0; i < a.size() || j < b.size();) {
+        if (i < a.size()) {
+          const std::uint64_t before = w.bit_count();
+          ta.encode(w, a[i++]);
+          bits_a += w.bit_count() - before;
+        }
+        for (int k = 0; k < 3 && j < b.size(); ++k) tb.encode(w, b[j++]);
+      }
+      if (paired) CHECK(table_a - 1 + bits_a == paired_bits(a, 255, TableForm::deltas));
+      const auto bytes = w.finish();
+      BitReader r(bytes.data(), bytes.size(), "test");
+      TableCode ra = TableCode::read(r, 255, true, "a", TableForm::deltas);
+      TableCode rb = TableCode::read(r, 255, true, "b", TableForm::deltas);
+      CHECK(ra.paired() == paired);
+      CHECK(r.bits_left() == 8 * bytes.size() - tables);
+      std::vector<std::uint32_t> da, db;
+      for (std::size_t i = 0, j = 0; i < a.size() || j < b.size();) {
+        if (i < a.size()) da.push_back(ra.decode(r)), ++i;
+        for (int k = 0; k < 3 && j < b.size(); ++k) db.push_back(rb.decode(r)), ++j;
+      }
+      CHECK(da == a);
+      CHECK(db == b);
+      CHECK(r.bits_left() < 8);
+    }
+}
+
+TEST_CASE("paired tables: cheaper than a plain code where one symbol dominates, free when every pair is the same") {
+  std::vector<std::uint64_t> freq(255, 0);
+  const auto seq = skewed(4000, 0.9, 0.0, 7);
+  for (std::uint32_t s : seq) ++freq[s];
+  const double entropy = entropy_bits(freq.data(), freq.size());
+  const std::uint64_t plain = coded_bits(freq), pairs = paired_bits(seq, 255, TableForm::deltas);
+  MESSAGE("p(0) = 0.9: entropy ", entropy, " bits, plain code ", plain, ", paired ", pairs);
+  CHECK(plain >= seq.size());  // a Huffman code spends a bit per symbol at least
+  CHECK(pairs < plain);
+  CHECK(pairs > entropy);
+  // Every pair (0, 0): the pair code's one-symbol form, 1 + 7 bits in all.
+  CHECK(paired_bits(std::vector<std::uint32_t>(1000, 0), 255, TableForm::deltas) == 8);
+  // Evenly spread ranks gain nothing from pairs (the code and its escape
+  // cost more than the plain code).
+  const auto flat = skewed(4000, 0.125, 0.0, 8);
+  std::fill(freq.begin(), freq.end(), 0);
+  for (std::uint32_t s : flat) ++freq[s];
+  CHECK(paired_bits(flat, 255, TableForm::deltas) >= coded_bits(freq));
+}
+
+TEST_CASE("paired tables: a pair code that gives the escape is followed by the escape code; damaged tables fail") {
+  // Hand-made: the paired flag, a pair code of one symbol (1, then 64, the
+  // escape, in 7 bits), then the escape code: lengths 1 for symbols 3 and 9
+  // in the delta form (a zero run of 3, -2 from the start length 3, a zero
+  // run of 5, the same length, end).
+  BitWriter w;
+  w.put(1, 1);   // paired
+  w.put(1, 1);   // pair code: one symbol
+  w.put(64, 7);  // the escape
+  w.put(0, 1);   // escape code: lengths
+  w.put(1, 2);   // 01 zero run
+  w.exp_golomb(2);  // of 3
+  w.put(0b1101, 4);  // -2: length 1 for symbol 3
+  w.put(1, 2);       // zero run
+  w.exp_golomb(4);   // of 5
+  w.put(0, 2);       // same: length 1 for symbol 9
+  w.put(0b1110, 4);  // end
+  // Symbols: escape (no bits), then 9 (code 1) and 3 (code 0); then the
+  // pending 3 with no bits; then another pair: 3, 3.
+  w.put(1, 1);
+  w.put(0, 1);
+  w.put(0, 1);
+  w.put(0, 1);
+  const auto bytes = w.finish();
+  BitReader r(bytes.data(), bytes.size(), "test");
+  TableCode t = TableCode::read(r, 255, true, "t", TableForm::deltas);
+  CHECK(t.paired());
+  std::vector<std::uint32_t> got;
+  for (int i = 0; i < 4; ++i) got.push_back(t.decode(r));
+  CHECK(got == std::vector<std::uint32_t>{9, 3, 3, 3});
+  // Cut inside the escape code: a bit-stream error, not a table error.
+  BitReader cut(bytes.data(), 2, "test");  // 16 of the table's 25 bits
+  CHECK(status_of([&] { TableCode::read(cut, 255, true, "t", TableForm::deltas); }) == Status::bad_layer);
+  // Not flagged: the first bit is the table's own (here: a one-symbol code).
+  BitReader plain(bytes.data(), bytes.size(), "test");
+  CHECK_FALSE(TableCode::read(plain, 255, false, "t", TableForm::deltas).paired());
 }

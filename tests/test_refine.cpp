@@ -81,6 +81,14 @@ void check_coders(const std::vector<std::uint8_t>& bytes, const Split& s, int q,
   CHECK((st == Status::bad_layer || st == Status::bad_huffman_table || (st == Status::ok && other != sorted(s.added))));
 }
 
+// Bits [at, at + n) of a layer's bit stream (its header fields), most
+// significant first.
+std::uint32_t header_field(const std::vector<std::uint8_t>& bytes, std::size_t at, int n) {
+  std::uint32_t v = 0;
+  for (std::size_t i = at; i < at + static_cast<std::size_t>(n); ++i) v = (v << 1) | ((bytes[i / 8] >> (7 - i % 8)) & 1u);
+  return v;
+}
+
 // Puts each point in `added` when pick(i) holds; the coarse part is canonical.
 Split split_by(const Points& all, const std::function<bool(std::size_t)>& pick) {
   Split s;
@@ -1002,15 +1010,59 @@ TEST_CASE("coder 5 (quadric ranking) round trips, and wins where the surface cur
   CHECK(same);
   five.fit = 1;
   CHECK(encode_refinement(s.coarse, s.added, q, five) != b5);  // the header differs
-  // The encoder's choice: coder 5, at least 3 % smaller than every ranking
-  // without the quadric (a single weight; coder 4's per-depth weights
-  // aside).
+  // The encoder's choice: coder 5, or coder 6 (its tables paired) with a
+  // quadric (F >= 6), at least 3 % smaller than every ranking without the
+  // quadric (a single weight; coder 4's per-depth weights aside).
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
   const std::size_t without = smallest_layer(s, q, {0, 1, 2, 3, 4, 6, 8, 12});
   MESSAGE("quadric ranking: ", layer.bytes.size(), " bytes, without: ", without, " (", s.added.size(),
           " added points)");
-  CHECK(layer.coder == 5);
+  CHECK((layer.coder == 5 || layer.coder == 6));
+  CHECK(header_field(layer.bytes, 7, 4) >= 6);  // F
   CHECK(100 * layer.bytes.size() <= 97 * without);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                          OctreeCoder::quadric) == sorted(s.added));
+                          static_cast<OctreeCoder>(layer.coder)) == sorted(s.added));
+}
+
+TEST_CASE("coder 6 (paired tables) round trips with every ranking, and the encoder pairs where it saves bits") {
+  const int q = 12;
+  const Split s = level_split(quantize(samples::torus(160, 60, 1.0, 0.2), q), 40);
+  // Forced: coder 6 with the rankings of coders 0, 3, 4 and 5, tables paired
+  // where smaller; read as coder 5, the pairing flags are misread.
+  for (int fit : {0, 10})
+    for (int gap : {0, 3})
+      for (bool planes : {false, true}) {
+        CAPTURE(fit);
+        CAPTURE(gap);
+        CAPTURE(planes);
+        RefinementParams p = params(fit ? 4 : 1, 3);
+        p.plane_contexts = planes;
+        p.gap = gap;
+        p.fit = fit;
+        p.paired = true;
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::paired, OctreeCoder::quadric);
+      }
+  // The encoder's choice on this surface: coder 6. Its header's fields,
+  // forced, give the same bytes with pairing, and a larger layer without.
+  const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
+  REQUIRE(layer.coder == 6);
+  RefinementParams p = params(static_cast<int>(header_field(layer.bytes, 0, 4)),
+                              static_cast<int>(header_field(layer.bytes, 4, 2)) + 1);
+  p.plane_contexts = header_field(layer.bytes, 6, 1) == 1;
+  p.fit = static_cast<int>(header_field(layer.bytes, 7, 4));
+  if (header_field(layer.bytes, 11, 1) == 0) {
+    p.gap = static_cast<int>(header_field(layer.bytes, 12, 4));
+  } else {
+    for (int d = 0; d < q; ++d) p.depth_gaps.push_back(static_cast<int>(header_field(layer.bytes, 12 + 4 * d, 4)));
+  }
+  p.paired = true;
+  CHECK(encode_refinement(s.coarse, s.added, q, p) == layer.bytes);
+  p.paired = false;
+  const std::size_t unpaired = encode_refinement(s.coarse, s.added, q, p).size();
+  MESSAGE("paired tables: ", layer.bytes.size(), " bytes, unpaired: ", unpaired);
+  CHECK(layer.bytes.size() < unpaired);
+  // Random points in a ball (no surface to rank by, no dominant child): no
+  // table pays for pairing, and the encoder keeps its coder.
+  const Split ball = split_by(quantize(samples::random_ball(3000, 7), q), [](std::size_t i) { return i % 4 == 0; });
+  CHECK(encode_refinement_layer(ball.coarse, ball.added, q).coder != 6);
 }

@@ -55,6 +55,10 @@ class HuffmanCode {
   std::uint32_t alphabet() const { return static_cast<std::uint32_t>(lengths_.size()); }
   /// True for the one-symbol form, whose symbols cost no bits.
   bool single() const { return single_; }
+  /// Whether `symbol` can occur: it has a code, or is the one symbol.
+  bool has(std::uint32_t symbol) const {
+    return single_ ? symbol == single_symbol_ : symbol < lengths_.size() && lengths_[symbol] != 0;
+  }
   int length(std::uint32_t symbol) const { return lengths_[symbol]; }
   /// Total bits to code `freq` with this code.
   std::uint64_t cost(const std::vector<std::uint64_t>& freq) const;

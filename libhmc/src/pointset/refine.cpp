@@ -8,6 +8,7 @@
 #include <string>
 
 #include "entropy/huffman.hpp"
+#include "entropy/paired.hpp"
 #include "pointset/octree.hpp"
 #include "pointset/plane_rank.hpp"
 #include "util/error.hpp"
@@ -361,6 +362,7 @@ struct TablePlan {
   std::vector<bool> fresh;                       // [slot]: a table is sent
   std::vector<int> table;                        // [slot]: the table used, -1 for none
   std::vector<std::vector<std::uint64_t>> freq;  // per table
+  std::vector<bool> paired;                      // per table, coder 6: the paired form (spec 7.4); else empty
   std::uint64_t bits = 0;                        // header, tables and symbols
 };
 
@@ -371,6 +373,7 @@ bool per_depth(const std::vector<int>& gaps) {
 
 // The coder of a plan, from its quadric and gap weights.
 OctreeCoder coder_of(const TablePlan& p) {
+  if (!p.paired.empty()) return OctreeCoder::paired;
   if (p.fit > 0) return OctreeCoder::quadric;
   if (std::all_of(p.gaps.begin(), p.gaps.end(), [](int g) { return g == 0; }))
     return p.planes == 2 ? OctreeCoder::planes : OctreeCoder::plain;
@@ -442,17 +445,63 @@ TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes
   return plan;
 }
 
+// The table of each node, by slot (spec 8A.1: depth, class, plane context).
+int table_of(const Symbol& s, const TablePlan& plan) {
+  const int k = std::min<int>(s.weight, plan.classes - 1);
+  const int x = plan.planes == 2 ? s.plane : 0;
+  return plan.table[static_cast<std::size_t>((s.depth * plan.classes + k) * plan.planes + x)];
+}
+
+// The symbols of each table in the order of the nodes that use them.
+std::vector<std::vector<std::uint32_t>> sequences(const std::vector<Symbol>& symbols, const TablePlan& plan) {
+  std::vector<std::vector<std::uint32_t>> out(plan.freq.size());
+  for (const Symbol& s : symbols) out[static_cast<std::size_t>(table_of(s, plan))].push_back(s.index);
+  return out;
+}
+
+// Coder 6 (spec 8A.7): pairs the symbols of the tables where that is
+// smaller, at the cost of a flag per table; returns false, leaving the plan
+// as it is, when it would not make the layer smaller.
+bool pair_tables(const std::vector<Symbol>& symbols, TablePlan& plan, bool force = false) {
+  const auto seqs = sequences(symbols, plan);
+  std::vector<bool> paired(plan.freq.size(), false);
+  // Coder 6's header is coder 5's (the fields of coders 3 to 5 that the
+  // plan lacks are written as zeros), plus a flag per table.
+  const OctreeCoder coder = coder_of(plan);
+  std::uint64_t bits = plan.bits + plan.freq.size();
+  if (coder == OctreeCoder::plain || coder == OctreeCoder::planes) bits += 1 + 4 + 1 + 4;
+  else if (coder == OctreeCoder::gap) bits += 4 + 1;
+  else if (coder == OctreeCoder::depth_gaps) bits += 4;
+  bool any = false;
+  for (std::size_t t = 0; t < seqs.size(); ++t) {
+    const std::uint64_t plain = coded_bits(plan.freq[t]);
+    const std::uint64_t pairs = paired_bits(seqs[t], kAlphabet, TableForm::deltas);
+    if (pairs < plain) {
+      paired[t] = any = true;
+      bits = bits - plain + pairs;
+    }
+  }
+  if (!force && (!any || (bits + 7) / 8 >= (plan.bits + 7) / 8)) return false;
+  plan.paired = std::move(paired);
+  plan.bits = bits;
+  return true;
+}
+
 std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const TablePlan& plan, int neighbours) {
-  std::vector<HuffmanCode> codes;
-  for (const auto& f : plan.freq) codes.push_back(HuffmanCode::from_frequencies(f));
+  const bool paired = !plan.paired.empty();
+  const auto seqs = sequences(symbols, plan);
+  std::vector<TableCode> codes;
+  for (std::size_t t = 0; t < seqs.size(); ++t)
+    codes.push_back(TableCode::build(seqs[t], kAlphabet, paired && plan.paired[t]));
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
   const OctreeCoder coder = coder_of(plan);
-  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric) {
+  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric ||
+      coder == OctreeCoder::paired) {
     w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
     const bool varies = per_depth(plan.gaps);
-    if (coder == OctreeCoder::quadric) {
+    if (coder == OctreeCoder::quadric || coder == OctreeCoder::paired) {
       w.put(static_cast<std::uint32_t>(plan.fit), 4);
       w.put(varies ? 1u : 0u, 1);
     }
@@ -462,15 +511,9 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   }
   for (std::size_t slot = 0; slot < plan.fresh.size(); ++slot) {
     w.put(plan.fresh[slot] ? 1u : 0u, 1);
-    if (plan.fresh[slot]) codes[static_cast<std::size_t>(plan.table[slot])].write(w);
+    if (plan.fresh[slot]) codes[static_cast<std::size_t>(plan.table[slot])].write(w, paired, TableForm::deltas);
   }
-  for (const Symbol& s : symbols) {
-    const int k = std::min<int>(s.weight, plan.classes - 1);
-    const int x = plan.planes == 2 ? s.plane : 0;
-    codes[static_cast<std::size_t>(
-              plan.table[static_cast<std::size_t>((s.depth * plan.classes + k) * plan.planes + x)])]
-        .encode(w, s.index);
-  }
+  for (const Symbol& s : symbols) codes[static_cast<std::size_t>(table_of(s, plan))].encode(w, s.index);
   return w.finish();
 }
 
@@ -503,6 +546,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     p.planes = forced->plane_contexts ? 2 : 1;
     p.gaps = gaps_of(*forced, q);
     p.fit = forced->fit;
+    if (forced->paired) p.paired.push_back(false);
     return {static_cast<std::uint8_t>(coder_of(p)), {}};
   }
 
@@ -609,6 +653,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     if (all_coders && coarse.size() >= 6) trial(neighbours, kQuadricNeighbours, none, weights);
     if (neighbours != 1) trial(1, 0, none, {});
   }
+  if (all_coders || (forced && forced->paired)) pair_tables(best->symbols, best->plan, forced && forced->paired);
   return {static_cast<std::uint8_t>(coder_of(best->plan)), write_layer(best->symbols, best->plan, best->neighbours)};
 }
 
@@ -623,10 +668,11 @@ class Decoder {
     classes_ = static_cast<int>(in.get(2)) + 1;
     std::vector<int> gaps(static_cast<std::size_t>(q), 0);
     int fit = 0;
-    if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric) {
+    const bool quadric = coder == OctreeCoder::quadric || coder == OctreeCoder::paired;
+    if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || quadric) {
       planes_ = static_cast<int>(in.get(1)) + 1;
-      if (coder == OctreeCoder::quadric) fit = static_cast<int>(in.get(4));
-      const bool varies = coder == OctreeCoder::depth_gaps || (coder == OctreeCoder::quadric && in.get(1) != 0);
+      if (quadric) fit = static_cast<int>(in.get(4));
+      const bool varies = coder == OctreeCoder::depth_gaps || (quadric && in.get(1) != 0);
       if (!varies) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(4)));
       else
         for (int& g : gaps) g = static_cast<int>(in.get(4));
@@ -638,7 +684,7 @@ class Decoder {
         for (int x = 0; x < planes_; ++x) {
           const auto slot = static_cast<std::size_t>((d * classes_ + k) * planes_ + x);
           if (in.get(1)) {
-            codes_.push_back(HuffmanCode::read(in, kAlphabet, slot_name(d, k, x), form));
+            codes_.push_back(TableCode::read(in, kAlphabet, coder == OctreeCoder::paired, slot_name(d, k, x), form));
             table_[slot] = static_cast<int>(codes_.size() - 1);
           } else if (d > 0) {
             table_[slot] = table_[slot - static_cast<std::size_t>(per_depth)];
@@ -694,7 +740,7 @@ class Decoder {
   std::uint64_t n_added_;
   int planes_ = 1;
   int neighbours_ = 0, classes_ = 1;
-  std::vector<HuffmanCode> codes_;
+  std::vector<TableCode> codes_;
   std::vector<int> table_;  // [(d * classes + k) * planes + x]: index into codes_, -1 for none
   std::optional<CoarseLevel> level_;
 };

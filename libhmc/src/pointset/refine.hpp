@@ -17,8 +17,9 @@ namespace hmc::detail {
 
 /// The exact REFN coders (spec 8A): the conditional octree (0), with plane
 /// contexts (2), with plane contexts and gap ranking (3), with a gap weight
-/// per depth (4), and with quadric ranking (5).
-enum class OctreeCoder : std::uint8_t { plain = 0, planes = 2, gap = 3, depth_gaps = 4, quadric = 5 };
+/// per depth (4), with quadric ranking (5),
+/// and coder 5 with paired tables (6).
+enum class OctreeCoder : std::uint8_t { plain = 0, planes = 2, gap = 3, depth_gaps = 4, quadric = 5, paired = 6 };
 
 /// The header fields of a refinement layer: the number of coarse neighbours
 /// that predict where added points lie (0 to 15; 0 disables the prediction),
@@ -42,10 +43,13 @@ struct RefinementParams {
   /// their distance from the quadric fitted to this many nearest coarse
   /// points (none below 6), with the gap weights of coders 3 and 4.
   int fit = 0;
+  /// Coder 6 (spec 8A.7): coder 5's header and ranking with a flag per
+  /// table, each table paired (spec 7.4) where that codes it in fewer bits.
+  bool paired = false;
 };
 
 /// A refinement layer as the encoder writes it: the REFN coder number (0,
-/// 2, 3, 4 or 5, an OctreeCoder) and its bits.
+/// 2, 3, 4, 5 or 6, an OctreeCoder) and its bits.
 struct RefinementLayer {
   std::uint8_t coder = 0;
   std::vector<std::uint8_t> bytes;
@@ -64,7 +68,7 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params);
 
-/// What the encoder writes: coder 0, 2, 3, 4 or 5, whichever is smallest.
+/// What the encoder writes: coder 0, 2, 3, 4, 5 or 6, whichever is smallest.
 RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                         int q);
 
