@@ -86,13 +86,14 @@ static double *make_ball(size_t n) {
   return xyz;
 }
 
-static uint8_t *encode_torus(unsigned nu, unsigned nv, int levels, size_t *size) {
+static uint8_t *encode_torus_with(unsigned nu, unsigned nv, int levels, int fast_decode, size_t *size) {
   mesh m = make_torus(nu, nv);
   hmc_encoder *enc = hmc_encoder_create(NULL);
   hmc_encode_options o;
   uint8_t *bytes = NULL;
   hmc_encode_options_init(&o);
   o.levels = levels;
+  o.fast_decode = fast_decode;
   o.boundary_mode = HMC_BOUNDARY_LINEAR;
   CHECK(enc != NULL);
   CHECK_STATUS(hmc_encoder_set_options(enc, &o), HMC_OK);
@@ -101,6 +102,10 @@ static uint8_t *encode_torus(unsigned nu, unsigned nv, int levels, size_t *size)
   free(m.xyz);
   free(m.tris);
   return bytes;
+}
+
+static uint8_t *encode_torus(unsigned nu, unsigned nv, int levels, size_t *size) {
+  return encode_torus_with(nu, nv, levels, 0, size);
 }
 
 /* ------------------------------------------------------------ the tests */
@@ -146,6 +151,7 @@ static void test_encode_options(void) {
   size_t size = 99;
   hmc_encode_options_init(&o);
   CHECK(o.bits == 12 && o.levels == 1 && o.kind == HMC_KIND_AUTO && o.write_info == 1);
+  CHECK(o.boundary_mode == HMC_BOUNDARY_LINEAR && o.fast_decode == 0);
   o.bits = 22;
   CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_INVALID_ARGUMENT);
   CHECK(strlen(hmc_encoder_message(e)) > 0);
@@ -166,6 +172,26 @@ static void test_encode_options(void) {
   CHECK_STATUS(hmc_encoder_encode(e, xyz, 1, NULL, 0, NULL, 0, NULL, &size), HMC_INVALID_ARGUMENT);
   CHECK_STATUS(hmc_encoder_encode(NULL, xyz, 1, NULL, 0, NULL, 0, &out, &size), HMC_INVALID_ARGUMENT);
   hmc_encoder_destroy(e);
+}
+
+/* fast_decode: a larger stream with the same points. */
+static void test_fast_decode(void) {
+  size_t size = 0, fast_size = 0, count = 0, fast_count = 0;
+  uint8_t *bytes = encode_torus(48, 20, 3, &size), *fast = encode_torus_with(48, 20, 3, 1, &fast_size);
+  hmc_decoder *d = hmc_decoder_create(NULL), *f = hmc_decoder_create(NULL);
+  uint32_t *pts = NULL, *fast_pts = NULL;
+  CHECK(bytes != NULL && fast != NULL && fast_size > size);
+  CHECK_STATUS(hmc_decoder_decode(d, bytes, size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_decode(f, fast, fast_size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_level_points(d, 2, &pts, &count), HMC_OK);
+  CHECK_STATUS(hmc_decoder_level_points(f, 2, &fast_pts, &fast_count), HMC_OK);
+  CHECK(count == 48 * 20 && fast_count == count && memcmp(pts, fast_pts, 3 * count * sizeof *pts) == 0);
+  free(pts);
+  free(fast_pts);
+  hmc_decoder_destroy(d);
+  hmc_decoder_destroy(f);
+  free(bytes);
+  free(fast);
 }
 
 static void test_round_trip(void) {
@@ -642,6 +668,7 @@ int main(void) {
   test_handles();
   test_encode_options();
   test_round_trip();
+  test_fast_decode();
   test_volume();
   for (i = 0; i < sizeof pieces / sizeof pieces[0]; ++i) test_streaming(pieces[i]);
   test_truncation();

@@ -60,6 +60,15 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   const bool named = r.out.find("\"coder\": 0, \"coder_name\": \"octree\"") != std::string::npos ||
                      r.out.find("\"coder\": 3, \"coder_name\": \"ranked octree, causal points\"") != std::string::npos;
   CHECK(named);
+
+  // --fast-decode: the plain octree, the same points.
+  r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/f.hmc") + " --bits 11 --fast-decode");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  r = hmc_run(dir, "dec " + q(dir + "/f.hmc") + " --points-only --canonical " + q(dir + "/fast-dump"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(slurp(dir + "/enc-dump/level-0.points") == slurp(dir + "/fast-dump/level-0.points"));
+  r = hmc_run(dir, "info " + q(dir + "/f.hmc") + " --json");
+  CHECK(r.out.find("\"coder\": 0, \"coder_name\": \"octree\"") != std::string::npos);
 }
 
 TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each, with the same finest mesh") {

@@ -282,3 +282,39 @@ TEST_CASE("stream structure errors around refinement layers") {
   std::swap(c[base], c[refn]);
   CHECK(status(c) == Status::bad_chunk);
 }
+
+TEST_CASE("fast_decode: plain octrees without neighbours, the same levels, a larger stream") {
+  const Mesh m = samples::torus(60, 24);
+  EncodeOptions opt;
+  opt.levels = 4;
+  auto small = encode(m, opt);
+  opt.fast_decode = true;
+  auto fast = encode(m, opt);
+  REQUIRE_MESSAGE(small.ok(), small.error().to_string());
+  REQUIRE_MESSAGE(fast.ok(), fast.error().to_string());
+  const auto& e = fast.value();
+  REQUIRE(e.levels.size() == small.value().levels.size());
+  for (std::size_t i = 0; i < e.levels.size(); ++i) {
+    CAPTURE(i);
+    CHECK(e.levels[i].points == small.value().levels[i].points);
+    CHECK(e.levels[i].triangles == small.value().levels[i].triangles);
+  }
+  MESSAGE("4-level torus: ", e.bytes.size(), " bytes with fast_decode, ", small.value().bytes.size(), " without");
+  CHECK(e.bytes.size() > small.value().bytes.size());
+  // BASE coder 0; every REFN with neighbours 0 (the first 4 bits of coders
+  // 0, 2-6 after the coder byte).
+  const ContainerView v = parse_container(e.bytes.data(), e.bytes.size(), kEnd);
+  int layers = 0;
+  for (const ChunkView& c : v.chunks) {
+    if (c.type == kBaseLayer) CHECK(c.payload[0] == 0);
+    if (c.type != kRefinement) continue;
+    ++layers;
+    CHECK(c.payload[0] != static_cast<std::uint8_t>(RefineCoder::anchored_vq));
+    CHECK((c.payload[1] >> 4) == 0);
+  }
+  CHECK(layers == 3);
+  auto d = decode(e.bytes.data(), e.bytes.size());
+  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  CHECK(d.value().finest().points == e.points);
+  CHECK(d.value().finest().triangles == small.value().levels.back().triangles);
+}

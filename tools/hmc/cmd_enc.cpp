@@ -27,7 +27,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 }  // namespace
 
 int cmd_enc(int argc, char** argv) {
-  Args a(argc, argv, 2, {"--json", "--no-info"},
+  Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode"},
          {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio",
           "--boundary", "--optimizer", "--vq-bits", "--vq-residual"});
   EncodeOptions opt;
@@ -39,6 +39,7 @@ int cmd_enc(int argc, char** argv) {
     return kUsage;
   }
   opt.write_info = !a.flag("--no-info");
+  opt.fast_decode = a.flag("--fast-decode");
   opt.levels = static_cast<int>(a.get_int("--levels", 1, 1, 64));
   opt.vq_bits = static_cast<int>(a.get_int("--vq-bits", 0, 0, 10));
   opt.vq_residual = static_cast<std::uint32_t>(a.get_int("--vq-residual", 0, 0, (1 << 21) - 1));

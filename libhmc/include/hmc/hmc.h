@@ -134,8 +134,8 @@ typedef enum hmc_fidelity {
 
 /** How boundary vertices are chosen for removal between levels (Dmax threshold). */
 typedef enum hmc_boundary_mode {
-  HMC_BOUNDARY_CONSTANT = 0, /**< the same threshold at every level (default) */
-  HMC_BOUNDARY_LINEAR = 1,   /**< a threshold growing linearly with the level */
+  HMC_BOUNDARY_CONSTANT = 0, /**< the same threshold at every level */
+  HMC_BOUNDARY_LINEAR = 1,   /**< a threshold growing linearly with the level (default) */
   HMC_BOUNDARY_ADAPTIVE = 2  /**< a threshold adapted to local spacing and level */
 } hmc_boundary_mode;
 
@@ -202,9 +202,11 @@ typedef struct hmc_encode_options {
   double removal_ratio; /**< share of a level's vertices removed to make the next coarser one, (0, 1] (default 0.3) */
   int kind;             /**< an ::hmc_kind; ::HMC_KIND_AUTO detects it from the connectivity given (default) */
   int fidelity;         /**< an ::hmc_fidelity (default ::HMC_FIDELITY_SHAPE) */
-  int boundary_mode;    /**< an ::hmc_boundary_mode (default ::HMC_BOUNDARY_CONSTANT) */
+  int boundary_mode;    /**< an ::hmc_boundary_mode (default ::HMC_BOUNDARY_LINEAR) */
   int optimizer;        /**< an ::hmc_optimizer (default ::HMC_OPTIMIZER_BEST) */
   int write_info;       /**< non-zero: write the ancillary `info` chunk (default 1) */
+  int fast_decode;      /**< non-zero: code the points for decoding speed, in larger streams (default 0; see
+                             `hmc::EncodeOptions::fast_decode`) */
 } hmc_encode_options;
 
 /** Fill encoder settings with the defaults.

@@ -197,6 +197,7 @@ void hmc_encode_options_init(hmc_encode_options* options) {
   options->boundary_mode = static_cast<int>(d.boundary_mode);
   options->optimizer = static_cast<int>(d.optimizer);
   options->write_info = d.write_info ? 1 : 0;
+  options->fast_decode = d.fast_decode ? 1 : 0;
 }
 
 hmc_encoder* hmc_encoder_create(const hmc_allocator* allocator) { return create_handle<hmc_encoder>(allocator); }
@@ -229,6 +230,7 @@ hmc_status hmc_encoder_set_options(hmc_encoder* encoder, const hmc_encode_option
     e.boundary_mode = static_cast<hmc::BoundaryMode>(o->boundary_mode);
     e.optimizer = static_cast<hmc::Optimizer>(o->optimizer);
     e.write_info = o->write_info != 0;
+    e.fast_decode = o->fast_decode != 0;
     encoder->options = e;
     return HMC_OK;
   });

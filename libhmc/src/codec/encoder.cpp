@@ -298,7 +298,7 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
     if (exact && layer_exact) {
       // Both coders are exact here: keep the smaller (and the other, in
       // case the codebook costs more than coder 1 saves: see below).
-      const RefinementLayer exact_layer = encode_refinement_layer(decoded, plan.added, q);
+      const RefinementLayer exact_layer = encode_refinement_layer(decoded, plan.added, q, options.fast_decode);
       std::vector<std::uint8_t> octree{exact_layer.coder};
       octree.insert(octree.end(), exact_layer.bytes.begin(), exact_layer.bytes.end());
       if (octree.size() < payload.size()) std::swap(octree, payload);
@@ -495,14 +495,15 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     const std::size_t before = w.size();
     ByteWriter layer;
     if (i + 1 == plans.size()) {
-      layer.bytes(encode_base(plan.points, q));
+      layer.bytes(encode_base(plan.points, q, options.fast_decode ? 0 : 3));
       w.chunk(kBaseLayer, layer.data());
       level.new_points = plan.points.size();
     } else if (!lossy_payloads.empty()) {
       w.chunk(kRefinement, lossy_payloads[i]);
       level.new_points = plans[i].added.size();
     } else {
-      const RefinementLayer refinement = encode_refinement_layer(plans[i + 1].points, plans[i].added, q);
+      const RefinementLayer refinement =
+          encode_refinement_layer(plans[i + 1].points, plans[i].added, q, options.fast_decode);
       layer.u8(refinement.coder);
       layer.bytes(refinement.bytes);
       w.chunk(kRefinement, layer.data());

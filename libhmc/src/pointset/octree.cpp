@@ -584,11 +584,15 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
 }  // namespace
 
 std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder) {
-  if (ranked_coder != kGapCoder && ranked_coder != kCausalCoder)
-    fail(Status::invalid_argument, "BASE: the encoder writes ranked coders 2 and 3 only");
+  if (ranked_coder != kPlainCoder && ranked_coder != kGapCoder && ranked_coder != kCausalCoder)
+    fail(Status::invalid_argument, "BASE: the encoder writes coders 0, 2 and 3 only");
   const auto keys = sorted_keys(points, q);
   const auto levels = occupancies(keys, q);
   auto plain = write_octree(levels, q);
+  if (ranked_coder == kPlainCoder) {
+    plain.insert(plain.begin(), kPlainCoder);
+    return plain;
+  }
   bool any_ranked = false;
   auto ranked = encode_ranked(levels, keys, q, any_ranked, ranked_coder == kCausalCoder);
   std::vector<std::uint8_t> out;

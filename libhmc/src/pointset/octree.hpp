@@ -33,8 +33,8 @@ std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size,
 /// (a flag per depth). The encoder ranks a depth only when that saves at
 /// least 2% of the depth's bits, since every ranked node costs the decoder
 /// a nearest-neighbour search. `ranked_coder`: 3, or 2 to compare with
-/// (tests); coder 1 is never written (coder 2 with every weight 0 ranks as
-/// it does).
+/// (tests), or 0 for coder 0 alone (decoding speed); coder 1 is never
+/// written (coder 2 with every weight 0 ranks as it does).
 std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder = 3);
 
 /// Decode a BASE payload (coder byte first) of exactly `n` points, in

@@ -524,7 +524,7 @@ std::vector<int> gaps_of(const RefinementParams& p, int q) {
 }
 
 RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::vector<GridPoint>& added_in, int q,
-                            const RefinementParams* forced, bool all_coders) {
+                            const RefinementParams* forced, bool all_coders, bool fast = false) {
   if (q < 1 || q > 21) fail(Status::invalid_argument, std::string(kWhat) + ": q must be 1..21");
   // The coarse level's canonical order breaks neighbour ties; accept any order here.
   std::vector<GridPoint> coarse = coarse_in;
@@ -642,6 +642,9 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   const std::vector<int> none(static_cast<std::size_t>(q), 0);
   if (forced) {
     trial(forced->neighbours, forced->fit, gaps_of(*forced, q), {});
+  } else if (fast) {
+    // No neighbours: nothing to search for while decoding.
+    trial(0, 0, none, {});
   } else {
     // The plane through 4 neighbours suits surfaces; the nearest point alone
     // suits volume interiors. With 4 neighbours (and all coders allowed),
@@ -758,8 +761,8 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 }
 
 RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
-                                        int q) {
-  return encode_impl(coarse, added, q, nullptr, true);
+                                        int q, bool fast) {
+  return encode_impl(coarse, added, q, nullptr, true, fast);
 }
 
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,

@@ -68,9 +68,10 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params);
 
-/// What the encoder writes: coder 0, 2, 3, 4, 5 or 6, whichever is smallest.
+/// What the encoder writes: coder 0, 2, 3, 4, 5 or 6, whichever is smallest;
+/// with `fast`, the smallest without neighbours (no search while decoding).
 RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
-                                        int q);
+                                        int q, bool fast = false);
 
 /// Decodes exactly `n_added` points; returns them in canonical order. Raises
 /// bad_layer or bad_huffman_table on malformed data, never reads out of
