@@ -526,7 +526,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
             f"the ranked octree (8.2, a nearest-neighbour search per node), points-only decoding of the 1-level "
             f"stream takes {statistics.geometric_mean(ratios):.0f} times Draco's point-cloud decoding of the same "
             f"points (geometric mean; {min(ratios):.0f} to {max(ratios):.0f}; whole processes, so start-up "
-            "dominates the small models): that bar holds for the plain coder only.")
+            "dominates the small models): that bar holds for the plain coder only, which `hmc enc --fast-decode` "
+            "writes.")
         say("")
     gm = statistics.geometric_mean([r["r_gpcc"] for r in results if r["r_gpcc"]])
     gl = statistics.geometric_mean([r["r_levels"] for r in results])
