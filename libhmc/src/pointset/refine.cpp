@@ -656,7 +656,24 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     if (all_coders && coarse.size() >= 6) trial(neighbours, kQuadricNeighbours, none, weights);
     if (neighbours != 1) trial(1, 0, none, {});
   }
-  if (all_coders || (forced && forced->paired)) pair_tables(best->symbols, best->plan, forced && forced->paired);
+  if (forced && forced->paired) {
+    pair_tables(best->symbols, best->plan, true);
+  } else if (all_coders) {
+    // Pairing changes what a table costs: the table layouts of the chosen
+    // ranking are planned again, each with its tables paired where smaller.
+    std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * depth_rows, 0);
+    for (const Symbol& s : best->symbols)
+      ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
+    TablePlan chosen = best->plan;
+    pair_tables(best->symbols, chosen);
+    for (int planes : plane_choices)
+      for (int classes = 1; classes <= kMaxClasses; ++classes) {
+        TablePlan p = plan_tables(freq, q, classes, planes, best->plan.gaps, best->plan.fit);
+        pair_tables(best->symbols, p);
+        if (bytes_of(p) < bytes_of(chosen)) chosen = std::move(p);
+      }
+    best->plan = std::move(chosen);
+  }
   return {static_cast<std::uint8_t>(coder_of(best->plan)), write_layer(best->symbols, best->plan, best->neighbours)};
 }
 
