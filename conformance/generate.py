@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x11"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x12"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -298,7 +298,7 @@ class PairedCoder:
     """§7.4: a paired table for the symbols `sequence`, in their order of
     use; an odd sequence's last pair takes 0 as its second symbol."""
 
-    def __init__(self, sequence, alphabet, tail=0):
+    def __init__(self, sequence, alphabet, tail=0, phantoms=False):
         self.sequence = list(sequence)
         self.alphabet = alphabet
         self.pairs = []
@@ -308,7 +308,9 @@ class PairedCoder:
             self.pairs.append((a, b))
         self.pair_syms = [a * 8 + b if a < 8 and b < 8 else 64 for a, b in self.pairs]
         escaped = [v for (a, b), p in zip(self.pairs, self.pair_syms) if p == 64 for v in (a, b)]
-        self.pair_coder = Coder(self.pair_syms, 65)
+        # phantoms: pairs (0, 0) and (0, 1) counted once more, so that the pair
+        # code has two symbols at least (§8.5, ranked depths)
+        self.pair_coder = Coder(self.pair_syms + ([0, 1] if phantoms else []), 65)
         self.escape = Coder(escaped, alphabet) if escaped else None
         self.next = 0
 
@@ -369,12 +371,14 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
-def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None):
+def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None):
     """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
     (refdec.child_order over the node centres of each depth); ranked[d]
     says whether depth d is ranked; `classes` contexts per ranked depth.
     gaps: coder 2 (§8.3) with weight gaps[d] at each ranked depth.
-    quadric: coder 3 (§8.4), with gaps, and quadric[d] the depth's flag."""
+    quadric: coder 3 (§8.4), with gaps, and quadric[d] the depth's flag.
+    paired: coder 4 (§8.5), with gaps and quadric; paired(d, j) says whether
+    table j of depth d is paired (§7.4)."""
     syms = []
     for d, nodes, occ_by_node in octree_levels(points, q):
         if not ranked[d]:
@@ -409,11 +413,18 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
             bw.put(1 if quadric[d] else 0, 1)
         if ranked[d]:
             # One table per context, of two symbols at least (§8.2): a context
-            # with fewer gets phantom symbols 0 and 1.
-            coders.append([Coder([v for c, v in syms[d] if c == j] + [0, 1], 255) for j in range(classes)])
+            # with fewer gets phantom symbols 0 and 1 (in a paired table, pairs).
+            row = []
+            for j in range(classes):
+                seq = [v for c, v in syms[d] if c == j]
+                row.append(PairedCoder(seq, 255, phantoms=True) if paired and paired(d, j) and seq
+                           else Coder(seq + [0, 1], 255))
+            coders.append(row)
         else:
-            coders.append([Coder(syms[d], 256)])
+            coders.append([PairedCoder(syms[d], 256) if paired and paired(d, 0) else Coder(syms[d], 256)])
         for c in coders[-1]:
+            if paired:
+                bw.put(1 if isinstance(c, PairedCoder) else 0, 1)
             c.table(bw)
     for d in range(q):
         for v in syms[d]:
@@ -421,12 +432,14 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
                 coders[d][v[0]].put(bw, v[1])
             else:
                 coders[d][0].put(bw, v)
-    return (b"\x03" if quadric is not None else b"\x02" if gaps else b"\x01") + bw.bytes()
+    coder = b"\x04" if paired else b"\x03" if quadric is not None else b"\x02" if gaps else b"\x01"
+    return coder + bw.bytes()
 
 
-def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, quadric=None):
+def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None):
     pts = sorted(set(pts))
-    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps, quadric), counts=(len(pts),),
+    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps, quadric, paired),
+                     counts=(len(pts),),
                      kind=kind, q=q,
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
 
@@ -1326,6 +1339,22 @@ def hb_base_causal():
     return a, b, c, d, e
 
 
+def hb_base_paired():
+    # BASE coder 4 (paired tables): a sphere at q = 8, neighbours 10, every
+    # table paired (the plain depth 0 too; escapes where nodes have several
+    # children; pair codes with phantom pairs where a context has few
+    # nodes), quadric and plane depths, 3 contexts; lattice and random
+    # points with neighbours 15, tables paired at alternate depths and
+    # contexts, kind surface.
+    a = base_ranked_stream(0, 8, sphere_pts(500, 8, 121), 10, [False] + [True] * 7, classes=3,
+                           gaps=[0, 3, 0, 6, 1, 0, 2, 4], quadric=[False, True, True, False, True, True, False, True],
+                           paired=lambda d, j: True)
+    b = base_ranked_stream(1, 6, lattice_pts(5, 4, (1, 2, 3)) + rand_pts(40, 6, 122), 15, [True] * 6, classes=2,
+                           gaps=[1, 0, 5, 2, 0, 3], quadric=[True, False, True, True, False, True],
+                           paired=lambda d, j: (d + j) % 2 == 0)
+    return a, b
+
+
 def hb_base_ranked_sphere():
     return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8, classes=4)
 
@@ -1514,6 +1543,10 @@ HANDBUILT = [
      "BASE coder 3 with neighbours 3 (at most 24 points, some nodes fewer than 6: no quadric), kind surface, 2 contexts", sec("base", "huff")),
     ("base-causal-neighbours-1", lambda: hb_base_causal()[3], P,
      "BASE coder 3 with neighbours 1 (the node's own centre only: no plane, no quadric), a plain depth, 1 context", sec("base", "huff")),
+    ("base-paired", lambda: hb_base_paired()[0], P,
+     "BASE coder 4 (paired tables) on a sphere at q = 8: neighbours 10, every table paired, the plain depth 0's too, escapes, phantom pairs in sparse contexts, quadric and plane depths, 3 contexts", sec("base", "huff")),
+    ("base-paired-lattice", lambda: hb_base_paired()[1], P,
+     "BASE coder 4 on lattice and random points, kind surface: neighbours 15, tables paired at alternate depths and contexts, 2 contexts", sec("base", "huff")),
     ("base-causal-neighbours-0", lambda: hb_base_causal()[4], P,
      "BASE coder 3 with neighbours 0 (no points: every child ties, the order is the child number), weights and quadric flags that change nothing, 2 contexts", sec("base", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
@@ -1742,8 +1775,11 @@ NEGATIVE = [
     ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
     ("neg-base-gaps-cut", "bad_layer", P, "BASE coder 2 at q = 1 whose payload ends inside the weight of its ranked depth", ["8.3", "13"],
      lambda: stream_q1(b"\x02" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(1, 1), bw.put(1, 1))))),
-    ("neg-base-coder", "bad_layer", P, "BASE coder 4", ["8", "13"],
-     lambda: stream_q1(b"\x04" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-coder", "bad_layer", P, "BASE coder 5", ["8", "13"],
+     lambda: stream_q1(b"\x05" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-paired-single", "bad_layer", P, "BASE coder 4 at q = 1 whose ranked depth's paired table has a one-symbol pair code (pairs would cost no bits)", ["7.4", "8.5", "13"],
+     lambda: stream_q1(b"\x04" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 4), bw.put(0, 1),
+                                                            bw.put(1, 1), bw.put(1, 1), bw.put(0, 7))))),
     ("neg-base-causal-cut", "bad_layer", P, "BASE coder 3 at q = 2 whose payload ends just before the quadric flag of its ranked depth 1 (depth 0 plain, its table 28 bits in the 4-bit form: 40 bits in all)", ["8.4", "13"],
      lambda: stream_q1(b"\x03" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(0, 1), write_table(bw, 256, lengths={0: 1, 1: 1}), bw.put(1, 1), bw.put(5, 4))), q=2)),
     ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 1: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],

@@ -300,20 +300,26 @@ def causal_points(nodes, occs, i, nb, neighbours, h):
 def decode_base(payload, q, n, form=1):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
-    if payload[0] not in (0, 1, 2, 3):
+    if payload[0] not in (0, 1, 2, 3, 4):
         raise DecodeError("bad_layer", "BASE: unknown coder %d" % payload[0])
     coder = payload[0]
     br = BitReader(payload, 1, "bad_layer", "BASE")
     neighbours = br.bits(4) if coder >= 1 else 0
     classes = br.bits(2) + 1 if coder >= 1 else 1
     ranked, tables, gaps, quadric = [], [], [], []
+
+    def table(alphabet):
+        if coder == 4 and br.bits(1) == 1:  # §8.5: a paired table (§7.4)
+            return PairedCode(br, alphabet, form)
+        return read_code(br, alphabet, form)
+
     for _ in range(q):
         ranked.append(coder >= 1 and br.bits(1) == 1)
         gaps.append(br.bits(4) if ranked[-1] and coder >= 2 else 0)  # §8.3: the depth's gap weight
-        quadric.append(br.bits(1) == 1 if ranked[-1] and coder == 3 else False)  # §8.4
-        tables.append([read_code(br, 255, form) for _ in range(classes)] if ranked[-1] else [read_code(br, 256, form)])
-        if ranked[-1] and any(t.single is not None for t in tables[-1]):
-            # §8.2: every ranked node costs a bit
+        quadric.append(br.bits(1) == 1 if ranked[-1] and coder >= 3 else False)  # §8.4
+        tables.append([table(255) for _ in range(classes)] if ranked[-1] else [table(256)])
+        # §8.2: every ranked node costs a bit; §8.5: every pair of them when paired
+        if ranked[-1] and any((t.pairs if isinstance(t, PairedCode) else t).single is not None for t in tables[-1]):
             raise DecodeError("bad_layer", "BASE: a one-symbol code at ranked depth %d" % (len(tables) - 1))
     nodes = [(0, 0, 0)]
     for d in range(q):
@@ -325,7 +331,7 @@ def decode_base(payload, q, n, form=1):
             nb = Neighbours(centres, q)
         occs = []
         for i, (X, Y, Z) in enumerate(nodes):
-            if ranked[d] and coder == 3:
+            if ranked[d] and coder >= 3:
                 P = causal_points(nodes, occs, i, nb, neighbours, h)
                 pi, split = child_order((X, Y, Z), d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
                                         fit=len(P) if quadric[d] else 0, points=P)

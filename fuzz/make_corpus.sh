@@ -192,19 +192,22 @@ for name, data in hand.items():
 def base_input(q, n, bits):
     return bytes([q - 1]) + struct.pack("<I", n - 1)[:3] + bits
 
+def base_points(head):
+    """The first level_points of a HEAD payload (the base layer's count)."""
+    n, shift, i = 0, 0, 3
+    while True:
+        n |= (head[i] & 0x7F) << shift
+        shift += 7
+        if not head[i] & 0x80:
+            return n
+        i += 1
+
 for name, data in sorted(streams.items()):
     if not name.endswith("-noinfo"):
         continue
     parts = dict(chunks(data))
     q = parts["SQNT"][0]
-    h = parts["HEAD"]
-    n, shift, i = 0, 0, 3
-    while True:
-        n |= (h[i] & 0x7F) << shift
-        shift += 7
-        if not h[i] & 0x80:
-            break
-        i += 1
+    n = base_points(parts["HEAD"])
     put("base_layer", name, base_input(q, n, parts["BASE"]))
     # The same stream declared one point short and one point long.
     if name.startswith("ball40"):
@@ -214,6 +217,12 @@ put("base_layer", "single-full-q3", base_input(3, 512, single_symbol_octree(3, [
 put("base_layer", "single-chain-q21", base_input(21, 1, single_symbol_octree(21, [1] * 21)))
 put("base_layer", "empty-q1", base_input(1, 1, b""))
 put("base_layer", "coder1-empty-q1", base_input(1, 1, b"\x01"))
+# Coder 4 (paired tables) from the conformance vectors: the samples' base
+# layers pair none.
+for case in ("base-paired", "base-paired-lattice"):
+    with open(os.path.join(root, "conformance", "vectors", case, "stream.hmc"), "rb") as f:
+        parts = dict(chunks(f.read()))
+    put("base_layer", case, base_input(parts["SQNT"][0], base_points(parts["HEAD"]), parts["BASE"]))
 
 # --- huffman: table form (u8), alphabet - 1 (u16), then a table and symbols
 def huff_input(alphabet, bits, form=0):

@@ -17,6 +17,7 @@
 #include "hmc/codec.hpp"
 #include "pointset/lattice_neighbours.hpp"
 #include "pointset/octree.hpp"
+#include "entropy/paired.hpp"
 #include "pointset/plane_rank.hpp"
 #include "pointset/refine.hpp"
 #include "samples.hpp"
@@ -532,13 +533,13 @@ TEST_CASE("malformed refinement streams are rejected, never misread") {
   }
 }
 
-TEST_CASE("base layer: the ranked octree (coders 2, 3) codes surfaces smaller and decodes every set exactly") {
+TEST_CASE("base layer: the ranked octree (coders 2-4) codes surfaces smaller and decodes every set exactly") {
   // A sampled surface: the plane through the neighbouring node centres
   // predicts the children, so the ranked coder is chosen and is smaller.
   const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
   const auto base = encode_base(sphere, 12);
   REQUIRE(!base.empty());
-  CHECK(base[0] == 3);
+  CHECK((base[0] == 3 || base[0] == 4));
   const auto plain = encode_octree(sphere, 12);
   CHECK(base.size() < plain.size() + 1);
   Points sorted = sphere;
@@ -552,9 +553,9 @@ TEST_CASE("base layer: the ranked octree (coders 2, 3) codes surfaces smaller an
       Points p = quantize(m, q);
       sort_canonical(p);
       p.erase(std::unique(p.begin(), p.end()), p.end());
-      for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{3}}) {
+      for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{3}, std::uint8_t{4}}) {
         const auto b = encode_base(p, q, coder);
-        CHECK((b[0] == 0 || b[0] == coder));
+        CHECK((b[0] == 0 || b[0] == coder || (coder == 4 && b[0] == 3)));
         CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
       }
     }
@@ -571,15 +572,28 @@ TEST_CASE("base layer: the ranked octree (coders 2, 3) codes surfaces smaller an
   CHECK(status_of([&] { decode_base(base.data(), base.size() - 1, 12, sorted.size()); }) == Status::bad_layer);
 }
 
-// A ranked depth's header fields in a BASE payload of coder 2 or 3
-// (spec 8.3, 8.4): whether it is ranked, its weight and its quadric flag.
+// Whether a BASE payload, its coder byte replaced by `coder`, decodes to
+// `points` (false when it fails).
+bool decodes_as(std::vector<std::uint8_t> base, std::uint8_t coder, int q, const Points& points) {
+  base[0] = coder;
+  try {
+    return decode_base(base.data(), base.size(), q, points.size()) == points;
+  } catch (const StreamError&) {
+    return false;
+  }
+}
+
+// A ranked depth's header fields in a BASE payload of coder 2, 3 or 4
+// (spec 8.3-8.5): whether it is ranked, its weight, its quadric flag and
+// how many of its tables are paired.
 struct RankedDepth {
   bool ranked = false;
   int gap = 0;
   bool quadric = false;
+  int paired = 0;
 };
 std::vector<RankedDepth> ranked_depths(const std::vector<std::uint8_t>& base, int q) {
-  REQUIRE((base[0] == 2 || base[0] == 3));
+  REQUIRE((base[0] == 2 || base[0] == 3 || base[0] == 4));
   BitReader in(base.data() + 1, base.size() - 1, "test");
   in.get(4);
   const int classes = static_cast<int>(in.get(2)) + 1;
@@ -587,8 +601,9 @@ std::vector<RankedDepth> ranked_depths(const std::vector<std::uint8_t>& base, in
   for (auto& d : out) {
     d.ranked = in.get(1) == 1;
     if (d.ranked) d.gap = static_cast<int>(in.get(4));
-    if (d.ranked && base[0] == 3) d.quadric = in.get(1) == 1;
-    for (int j = 0; j < (d.ranked ? classes : 1); ++j) HuffmanCode::read(in, d.ranked ? 255 : 256, "test", TableForm::deltas);
+    if (d.ranked && base[0] >= 3) d.quadric = in.get(1) == 1;
+    for (int j = 0; j < (d.ranked ? classes : 1); ++j)
+      d.paired += TableCode::read(in, d.ranked ? 255 : 256, base[0] == 4, "test", TableForm::deltas).paired();
   }
   return out;
 }
@@ -638,14 +653,7 @@ TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before
     CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.ranked && !d.quadric; }));
     // The flags and the causal points matter: read as coder 2 (no flags,
     // node centres only), the stream fails or gives another set.
-    auto as_two = three;
-    as_two[0] = 2;
-    bool same = false;
-    try {
-      same = decode_base(as_two.data(), as_two.size(), 12, sorted.size()) == sorted;
-    } catch (const StreamError&) {
-    }
-    CHECK(!same);
+    CHECK_FALSE(decodes_as(three, 2, 12, sorted));
   }
   // A depth of more than 16,384 nodes is first judged on a sample block of
   // its nodes (their causal points taken from the block's own slice of the
@@ -678,9 +686,49 @@ TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before
       if (((g[0] | g[1] | g[2]) >> q) == 0) p.push_back(g);
     p = sorted(p);
     const auto b = encode_base(p, q);
-    CHECK(b[0] == 3);
+    CHECK((b[0] == 3 || b[0] == 4));
     CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
   }
+}
+
+TEST_CASE("base layer: coder 4 pairs the tables where that is smaller, and a ranked depth's pairs cost a bit") {
+  // A sphere sampled evenly: deep depths where most nodes have one child,
+  // the ranking's first most often.
+  const Points pts = sorted(evenly_spread(quantize(samples::random_sphere_points(60000, 13), 12), 24));
+  const auto three = encode_base(pts, 12, 3), four = encode_base(pts, 12);
+  REQUIRE(three[0] == 3);
+  REQUIRE(four[0] == 4);
+  MESSAGE(pts.size() << " points: coder 3 " << three.size() << " bytes, coder 4 " << four.size());
+  CHECK(four.size() < three.size());
+  CHECK(decode_base(four.data(), four.size(), 12, pts.size()) == pts);
+  // The same rankings (weights and flags), some tables paired.
+  const auto d3 = ranked_depths(three, 12), d4 = ranked_depths(four, 12);
+  int paired = 0;
+  for (int d = 0; d < 12; ++d) {
+    CAPTURE(d);
+    CHECK(d3[static_cast<std::size_t>(d)].ranked == d4[static_cast<std::size_t>(d)].ranked);
+    CHECK(d3[static_cast<std::size_t>(d)].gap == d4[static_cast<std::size_t>(d)].gap);
+    CHECK(d3[static_cast<std::size_t>(d)].quadric == d4[static_cast<std::size_t>(d)].quadric);
+    paired += d4[static_cast<std::size_t>(d)].paired;
+  }
+  CHECK(paired > 0);
+  // Read as coder 3 (no flags), the stream fails or gives another set.
+  CHECK_FALSE(decodes_as(four, 3, 12, pts));
+  // A ranked depth whose paired table's pair code is the one-symbol form:
+  // pairs would cost nothing, so the stream is refused before any node.
+  BitWriter w;
+  w.put(1, 4);  // neighbours
+  w.put(0, 2);  // one context
+  w.put(1, 1);  // depth 0 ranked
+  w.put(0, 4);  // gap weight
+  w.put(0, 1);  // no quadric
+  w.put(1, 1);  // paired
+  w.put(1, 1);  // pair code: one symbol,
+  w.put(0, 7);  // the pair (0, 0)
+  std::vector<std::uint8_t> bad{4};
+  const auto bits = w.finish();
+  bad.insert(bad.end(), bits.begin(), bits.end());
+  CHECK(status_of([&] { decode_base(bad.data(), bad.size(), 1, 1); }) == Status::bad_layer);
 }
 
 TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and the node itself is not a gap") {

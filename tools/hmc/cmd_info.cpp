@@ -31,6 +31,7 @@ const char* base_coder_name(int coder) {
     case 1: return "ranked octree";
     case 2: return "ranked octree, gap weights";
     case 3: return "ranked octree, causal points";
+    case 4: return "ranked octree, causal points, paired tables";
     default: return "unknown";
   }
 }

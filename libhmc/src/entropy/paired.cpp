@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "entropy/paired.hpp"
 
+#include <algorithm>
+
 #include "util/error.hpp"
 
 namespace hmc::detail {
@@ -15,6 +17,14 @@ void for_each_pair(const std::vector<std::uint32_t>& sequence, F&& f) {
 }
 
 bool pairs_up(std::uint32_t a, std::uint32_t b) { return a < kPairedSymbols && b < kPairedSymbols; }
+
+// Unused symbols given a phantom count, the first ones first, until two are
+// used: a code of two symbols at least.
+void two_at_least(std::vector<std::uint64_t>& freq) {
+  auto used = std::count_if(freq.begin(), freq.end(), [](std::uint64_t v) { return v != 0; });
+  for (std::size_t x = 0; x < freq.size() && used < 2; ++x)
+    if (freq[x] == 0) freq[x] = 1, ++used;
+}
 
 // The frequencies of the pair code's symbols and of the escaped symbols.
 void pair_frequencies(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet,
@@ -34,10 +44,21 @@ void pair_frequencies(const std::vector<std::uint32_t>& sequence, std::uint32_t 
 
 }  // namespace
 
-std::uint64_t paired_bits(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, TableForm form) {
+std::uint64_t paired_bits(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, TableForm form,
+                          bool two_codes) {
   std::vector<std::uint64_t> pairs, escaped;
   pair_frequencies(sequence, alphabet, pairs, escaped);
-  return coded_bits(pairs, form) + (pairs[kPairEscape] ? coded_bits(escaped, form) : 0);
+  const bool escape_used = pairs[kPairEscape] != 0;
+  if (!two_codes) return coded_bits(pairs, form) + (escape_used ? coded_bits(escaped, form) : 0);
+  // The phantom symbols' codes are written but never used.
+  std::vector<std::uint64_t> padded = pairs;
+  two_at_least(padded);
+  const HuffmanCode code = HuffmanCode::from_frequencies(padded);
+  BitWriter w;
+  code.write(w, form);
+  // An escape code follows when the pair code can give the escape, even a
+  // phantom one (then a one-symbol code, of no escaped symbol).
+  return w.bit_count() + code.cost(pairs) + (code.has(kPairEscape) ? coded_bits(escaped, form) : 0);
 }
 
 TableCode TableCode::read(BitReader& in, std::uint32_t alphabet, bool flagged, const std::string& what,
@@ -54,20 +75,25 @@ TableCode TableCode::read(BitReader& in, std::uint32_t alphabet, bool flagged, c
   return t;
 }
 
-TableCode TableCode::build(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, bool paired) {
+TableCode TableCode::build(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, bool paired,
+                           bool two_codes) {
   TableCode t;
   t.paired_ = paired;
   t.sequence_ = sequence;
   if (!paired) {
     std::vector<std::uint64_t> freq(alphabet, 0);
     for (std::uint32_t s : sequence) ++freq[s];
+    if (two_codes) two_at_least(freq);
     t.code_ = HuffmanCode::from_frequencies(freq);
     return t;
   }
   std::vector<std::uint64_t> pairs, escaped;
   pair_frequencies(sequence, alphabet, pairs, escaped);
+  if (two_codes) two_at_least(pairs);
   t.code_ = HuffmanCode::from_frequencies(pairs);
-  t.escape_used_ = pairs[kPairEscape] != 0;
+  // The escape code follows whenever the pair code can give the escape (a
+  // phantom escape included).
+  t.escape_used_ = t.code_.has(kPairEscape);
   if (t.escape_used_) t.escape_ = HuffmanCode::from_frequencies(escaped);
   return t;
 }

@@ -31,8 +31,11 @@ constexpr std::uint32_t kPairAlphabet = kPairEscape + 1;
 /// The bits of the paired form of a table (the pair code, the escape code
 /// when used, and every symbol of `sequence`), its flag excluded: what
 /// writing it would take (encoders' plans). `sequence`: the table's symbols
-/// in the order of use, each below `alphabet`.
-std::uint64_t paired_bits(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, TableForm form);
+/// in the order of use, each below `alphabet`. `two_codes`: the pair code
+/// must give two pairs codes at least (not the one-symbol form: where every
+/// use must cost a bit, spec 8.5).
+std::uint64_t paired_bits(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, TableForm form,
+                          bool two_codes = false);
 
 /// One table of a layer that may pair its symbols: either a plain code
 /// (spec 7.1) or the paired form (spec 7.4). Decoders read it and decode;
@@ -43,8 +46,11 @@ class TableCode {
   /// Reads a table; with `flagged`, a flag first says whether it is paired
   /// (streams whose layer allows pairing), else it is plain.
   static TableCode read(BitReader& in, std::uint32_t alphabet, bool flagged, const std::string& what, TableForm form);
-  /// The encoder's table for `sequence`, paired or not as asked.
-  static TableCode build(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, bool paired);
+  /// The encoder's table for `sequence`, paired or not as asked; with
+  /// `two_codes`, its code (the pair code when paired) gives codes to two
+  /// symbols at least.
+  static TableCode build(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, bool paired,
+                         bool two_codes = false);
 
   void write(BitWriter& out, bool flagged, TableForm form) const;
   /// Codes the next symbol of the sequence given to build(), which must be
@@ -54,6 +60,9 @@ class TableCode {
   std::uint32_t decode(BitReader& in);
 
   bool paired() const { return paired_; }
+  /// Whether its code, or its pair code when paired, is the one-symbol
+  /// form: then a symbol, or a pair, costs no bits.
+  bool free() const { return code_.single(); }
 
  private:
   bool paired_ = false;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "entropy/huffman.hpp"
+#include "entropy/paired.hpp"
 #include "pointset/lattice_neighbours.hpp"
 #include "pointset/plane_rank.hpp"
 #include "util/error.hpp"
@@ -166,7 +167,7 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
 
 namespace {
 
-constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2, kCausalCoder = 3;
+constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2, kCausalCoder = 3, kPairedCoder = 4;
 // The gap weights the reference encoder tries at a ranked depth (coder 2).
 constexpr std::array<int, 9> kGapChoices{0, 1, 2, 3, 4, 6, 8, 11, 15};
 constexpr int kMaxNeighbours = 15;  // 4-bit field
@@ -324,17 +325,18 @@ std::vector<std::uint64_t> two_symbols_at_least(std::vector<std::uint64_t> freq)
 // Coder 3 with `classes` contexts per ranked depth, from the plain and
 // ranked symbols of every depth (ranked[d][i], context[d][i]) and each
 // depth's gap weight and quadric flag; coder 2 (no flags) unless `causal`.
+// With `pairing` (coder 3 only), coder 4 when pairing some tables (spec
+// 7.4) saves more than their flags cost: `paired` says which was written.
 std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels, int q, int classes,
                                        const std::vector<std::vector<std::uint8_t>>& ranked_sym,
                                        const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked,
                                        const std::vector<int>& gaps, const std::vector<bool>& quadric, bool causal,
-                                       int neighbours) {
-  BitWriter w;
-  w.put(static_cast<std::uint32_t>(neighbours), 4);
-  w.put(static_cast<std::uint32_t>(classes - 1), 2);
+                                       int neighbours, bool pairing, bool& paired) {
   any_ranked = false;
   std::vector<bool> ranked(static_cast<std::size_t>(q), false);
-  std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
+  // Per depth, its tables' symbol sequences in node order (one table at a
+  // plain depth, `classes` at a ranked one).
+  std::vector<std::vector<std::vector<std::uint32_t>>> seqs(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     std::vector<std::uint64_t> plain_freq(256, 0);
@@ -342,28 +344,64 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
     std::vector<std::vector<std::uint64_t>> freq(static_cast<std::size_t>(classes), std::vector<std::uint64_t>(255, 0));
     for (std::size_t i = 0; i < ranked_sym[sd].size(); ++i)
       ++freq[std::min<std::size_t>(context[sd][i], static_cast<std::size_t>(classes - 1))][ranked_sym[sd][i]];
-    const HuffmanCode plain_code = HuffmanCode::from_frequencies(plain_freq);
-    const std::uint64_t plain_bits = table_and_symbols(plain_freq, plain_code);
-    std::vector<HuffmanCode> ranked_codes;
+    const std::uint64_t plain_bits = coded_bits(plain_freq);
     std::uint64_t ranked_bits = 0;
     for (const auto& f : freq) {
-      ranked_codes.push_back(HuffmanCode::from_frequencies(two_symbols_at_least(f)));
-      ranked_bits += table_and_symbols(f, ranked_codes.back());
+      const HuffmanCode code = HuffmanCode::from_frequencies(two_symbols_at_least(f));
+      ranked_bits += table_and_symbols(f, code);
     }
     // Rank only where it pays for the decoder's searches: 2% of the depth.
     ranked_bits += causal ? 5 : 4;  // the depth's weight (and quadric flag)
     const bool use = !ranked_sym[sd].empty() && 100 * ranked_bits < 98 * plain_bits;
     ranked[sd] = use;
     any_ranked = any_ranked || use;
-    w.put(use ? 1 : 0, 1);
-    if (use) w.put(static_cast<std::uint32_t>(gaps[sd]), 4);
-    if (use && causal) w.put(quadric[sd] ? 1 : 0, 1);
     if (use) {
-      codes[sd] = std::move(ranked_codes);
+      seqs[sd].resize(static_cast<std::size_t>(classes));
+      for (std::size_t i = 0; i < ranked_sym[sd].size(); ++i)
+        seqs[sd][std::min<std::size_t>(context[sd][i], static_cast<std::size_t>(classes - 1))].push_back(
+            ranked_sym[sd][i]);
     } else {
-      codes[sd] = {plain_code};
+      seqs[sd].emplace_back(levels[sd].occupancy.begin(), levels[sd].occupancy.end());
     }
-    for (const auto& c : codes[sd]) c.write(w);
+  }
+  // Pairing: each table where its paired form is smaller (at a ranked
+  // depth, with a pair code of two symbols at least, so that every pair of
+  // ranked nodes costs a bit, spec 8.5); worth it when the savings exceed
+  // the flags.
+  std::vector<std::vector<bool>> pair(static_cast<std::size_t>(q));
+  std::uint64_t saved = 0, flags = 0;
+  for (int d = 0; d < q; ++d) {
+    const auto sd = static_cast<std::size_t>(d);
+    const std::uint32_t alphabet = ranked[sd] ? 255 : 256;
+    for (const auto& seq : seqs[sd]) {
+      ++flags;
+      bool better = false;
+      if (pairing) {
+        std::vector<std::uint64_t> f(alphabet, 0);
+        for (std::uint32_t v : seq) ++f[v];
+        const std::uint64_t plain = ranked[sd] ? table_and_symbols(f, HuffmanCode::from_frequencies(
+                                                                            two_symbols_at_least(f)))
+                                               : coded_bits(f);
+        const std::uint64_t pairs = paired_bits(seq, alphabet, TableForm::deltas, ranked[sd]);
+        if (pairs < plain) saved += plain - pairs, better = true;
+      }
+      pair[sd].push_back(better);
+    }
+  }
+  paired = pairing && saved > flags;
+  BitWriter w;
+  w.put(static_cast<std::uint32_t>(neighbours), 4);
+  w.put(static_cast<std::uint32_t>(classes - 1), 2);
+  std::vector<std::vector<TableCode>> codes(static_cast<std::size_t>(q));
+  for (int d = 0; d < q; ++d) {
+    const auto sd = static_cast<std::size_t>(d);
+    w.put(ranked[sd] ? 1 : 0, 1);
+    if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), 4);
+    if (ranked[sd] && causal) w.put(quadric[sd] ? 1 : 0, 1);
+    for (std::size_t j = 0; j < seqs[sd].size(); ++j) {
+      codes[sd].push_back(TableCode::build(seqs[sd][j], ranked[sd] ? 255 : 256, paired && pair[sd][j], ranked[sd]));
+      codes[sd].back().write(w, paired, TableForm::deltas);
+    }
   }
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
@@ -448,9 +486,10 @@ std::size_t cheapest_choice(const std::vector<std::uint8_t>& all, const std::vec
 // Coder 3: at every depth, the ranked symbols for the gap weight and
 // ranking (plane or quadric) that make them cheapest, for each neighbour
 // count of kBaseNeighbours; the smallest stream. Coder 2 (the weight
-// alone, the ranking of 8.3, the first neighbour count) unless `causal`.
+// alone, the ranking of 8.3, the first neighbour count) unless `causal`;
+// with `pairing`, coder 4 where it is smaller (`paired` says so).
 std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
-                                        int q, bool& any_ranked, bool causal) {
+                                        int q, bool& any_ranked, bool causal, bool pairing, bool& paired) {
   const auto sq = static_cast<std::size_t>(q);
   const std::size_t counts = causal ? kBaseNeighbours.size() : 1;
   std::vector<RankedDepths> by_count(counts, RankedDepths(sq));
@@ -483,18 +522,31 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
   // more neighbours only where they save 1% of it (they make decoding
   // slower: on the bunny's base layer, 15 instead of 10 take points-only
   // decoding from 0.21 to 0.33 s for 0.3%).
+  // The neighbour count is chosen on the unpaired streams, then pairing
+  // kept where it makes the chosen one smaller.
   std::vector<std::uint8_t> best;
+  std::size_t best_count = 0;
   for (std::size_t n = 0; n < counts; ++n) {
     std::vector<std::uint8_t> smallest;
     bool smallest_any = false;
     for (int classes : {1, 2, 4}) {
       const RankedDepths& r = by_count[n];
-      bool any = false;
-      auto bytes =
-          write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal, kBaseNeighbours[n]);
+      bool any = false, unused = false;
+      auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal,
+                                kBaseNeighbours[n], false, unused);
       if (smallest.empty() || bytes.size() < smallest.size()) smallest = std::move(bytes), smallest_any = any;
     }
-    if (best.empty() || 100 * smallest.size() < 99 * best.size()) best = std::move(smallest), any_ranked = smallest_any;
+    if (best.empty() || 100 * smallest.size() < 99 * best.size())
+      best = std::move(smallest), any_ranked = smallest_any, best_count = n;
+  }
+  paired = false;
+  if (!pairing) return best;
+  for (int classes : {1, 2, 4}) {
+    const RankedDepths& r = by_count[best_count];
+    bool any = false, with_pairs = false;
+    auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal,
+                              kBaseNeighbours[best_count], true, with_pairs);
+    if (with_pairs && bytes.size() < best.size()) best = std::move(bytes), any_ranked = any, paired = true;
   }
   return best;
 }
@@ -511,7 +563,7 @@ constexpr std::array<std::uint8_t, 256> kChildCount = [] {
 // says whether depth d sends ranked occupancies (coder 0: none).
 // codes[d][j]: the table of depth d for context j (one at plain depths).
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
-                                    const std::vector<std::vector<HuffmanCode>>& codes, const std::vector<bool>& ranked,
+                                    std::vector<std::vector<TableCode>>& codes, const std::vector<bool>& ranked,
                                     int neighbours, const std::vector<int>& gaps, bool causal = false,
                                     const std::vector<bool>& quadric = {}) {
   std::vector<std::uint64_t> nodes{0}, next;
@@ -521,7 +573,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
     next.clear();
     occupancies.clear();
     next.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(n, 8 * std::uint64_t{nodes.size()})));
-    const auto& table = codes[static_cast<std::size_t>(d)];
+    auto& table = codes[static_cast<std::size_t>(d)];
     std::optional<DepthNodes> depth;
     if (ranked[static_cast<std::size_t>(d)]) depth.emplace(nodes, d, q);
     for (std::size_t i = 0; i < nodes.size(); ++i) {
@@ -550,42 +602,46 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
   return canonical_from_morton(nodes, q, next);  // next: spare capacity for the sort
 }
 
-// Coder 1, 2 (a gap weight per ranked depth) or 3 (a gap weight and a
-// quadric flag per ranked depth, and the causal points).
+// Coder 1, 2 (a gap weight per ranked depth), 3 (a gap weight and a
+// quadric flag per ranked depth, and the causal points) or 4 (coder 3 with
+// a pairing flag per table).
 std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form,
                                      std::uint8_t coder) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
-  std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
+  const bool causal = coder >= kCausalCoder, flagged = coder == kPairedCoder;
+  std::vector<std::vector<TableCode>> codes(static_cast<std::size_t>(q));
   std::vector<bool> ranked;
   std::vector<int> gaps(static_cast<std::size_t>(q), 0);
   std::vector<bool> quadric(static_cast<std::size_t>(q), false);
   for (int d = 0; d < q; ++d) {
     ranked.push_back(in.get(1) == 1);
     if (ranked.back() && coder >= kGapCoder) gaps[static_cast<std::size_t>(d)] = static_cast<int>(in.get(4));
-    if (ranked.back() && coder == kCausalCoder) quadric[static_cast<std::size_t>(d)] = in.get(1) == 1;
+    if (ranked.back() && causal) quadric[static_cast<std::size_t>(d)] = in.get(1) == 1;
     const std::string what = "BASE ranked octree table for depth " + std::to_string(d);
     if (!ranked.back()) {
-      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, what, form));
+      codes[static_cast<std::size_t>(d)].push_back(TableCode::read(in, 256, flagged, what, form));
       continue;
     }
     for (int j = 0; j < classes; ++j) {
-      codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 255, what + " context " + std::to_string(j), form));
-      // Every ranked node costs a bit: its nearest-neighbour search is paid
-      // for by the stream (spec 8.2).
-      if (codes[static_cast<std::size_t>(d)].back().single())
+      codes[static_cast<std::size_t>(d)].push_back(
+          TableCode::read(in, 255, flagged, what + " context " + std::to_string(j), form));
+      // Every ranked node costs a bit, every pair of them when paired: its
+      // nearest-neighbour search is paid for by the stream (spec 8.2, 8.5).
+      if (codes[static_cast<std::size_t>(d)].back().free())
         fail(Status::bad_layer, what + " context " + std::to_string(j) + ": a one-symbol code at a ranked depth");
     }
   }
-  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps, coder == kCausalCoder, quadric);
+  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps, causal, quadric);
 }
 
 }  // namespace
 
 std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder) {
-  if (ranked_coder != kPlainCoder && ranked_coder != kGapCoder && ranked_coder != kCausalCoder)
-    fail(Status::invalid_argument, "BASE: the encoder writes coders 0, 2 and 3 only");
+  if (ranked_coder != kPlainCoder && ranked_coder != kGapCoder && ranked_coder != kCausalCoder &&
+      ranked_coder != kPairedCoder)
+    fail(Status::invalid_argument, "BASE: the encoder writes coders 0, 2, 3 and 4 only");
   const auto keys = sorted_keys(points, q);
   const auto levels = occupancies(keys, q);
   auto plain = write_octree(levels, q);
@@ -593,14 +649,15 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
     plain.insert(plain.begin(), kPlainCoder);
     return plain;
   }
-  bool any_ranked = false;
-  auto ranked = encode_ranked(levels, keys, q, any_ranked, ranked_coder == kCausalCoder);
+  bool any_ranked = false, paired = false;
+  auto ranked = encode_ranked(levels, keys, q, any_ranked, ranked_coder >= kCausalCoder, ranked_coder == kPairedCoder,
+                              paired);
   std::vector<std::uint8_t> out;
-  // Coder 3 only when it saves 1% of the layer: its searches cost decoding
-  // time (measured with coder 1: on a million random points in a ball it
-  // saved 0.05% and made points-only decoding 25% slower).
+  // A ranked coder only when it saves 1% of the layer: its searches cost
+  // decoding time (measured with coder 1: on a million random points in a
+  // ball it saved 0.05% and made points-only decoding 25% slower).
   const bool use_ranked = any_ranked && 100 * ranked.size() < 99 * plain.size();
-  out.push_back(use_ranked ? ranked_coder : kPlainCoder);
+  out.push_back(!use_ranked ? kPlainCoder : paired ? kPairedCoder : ranked_coder == kGapCoder ? kGapCoder : kCausalCoder);
   const auto& body = use_ranked ? ranked : plain;
   out.insert(out.end(), body.begin(), body.end());
   return out;
@@ -609,16 +666,17 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
   if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n, form);
-  if (data[0] == kRankedCoder || data[0] == kGapCoder || data[0] == kCausalCoder)
+  if (data[0] == kRankedCoder || data[0] == kGapCoder || data[0] == kCausalCoder || data[0] == kPairedCoder)
     return decode_ranked(data + 1, size - 1, q, n, form, data[0]);
   fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
 }
 
 std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   BitReader in(data, size, "BASE octree");
-  std::vector<std::vector<HuffmanCode>> codes(static_cast<std::size_t>(q));
+  std::vector<std::vector<TableCode>> codes(static_cast<std::size_t>(q));
   for (int d = 0; d < q; ++d)
-    codes[static_cast<std::size_t>(d)].push_back(HuffmanCode::read(in, 256, "BASE octree table for depth " + std::to_string(d), form));
+    codes[static_cast<std::size_t>(d)].push_back(
+        TableCode::read(in, 256, false, "BASE octree table for depth " + std::to_string(d), form));
   return decode_nodes(in, q, n, codes, std::vector<bool>(static_cast<std::size_t>(q), false), 0,
                       std::vector<int>(static_cast<std::size_t>(q), 0));
 }
