@@ -32,8 +32,8 @@ constexpr std::uint32_t kPairAlphabet = kPairEscape + 1;
 /// when used, and every symbol of `sequence`), its flag excluded: what
 /// writing it would take (encoders' plans). `sequence`: the table's symbols
 /// in the order of use, each below `alphabet`. `two_codes`: the pair code
-/// must give two pairs codes at least (not the one-symbol form: where every
-/// use must cost a bit, spec 8.5).
+/// must have codes for two pairs at least (not the one-symbol form: where
+/// every pair must cost a bit, spec 8.5).
 std::uint64_t paired_bits(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, TableForm form,
                           bool two_codes = false);
 

@@ -469,9 +469,8 @@ bool pair_tables(const std::vector<Symbol>& symbols, TablePlan& plan, bool force
   // plan lacks are written as zeros), plus a flag per table.
   const OctreeCoder coder = coder_of(plan);
   std::uint64_t bits = plan.bits + plan.freq.size();
-  if (coder == OctreeCoder::plain || coder == OctreeCoder::planes) bits += 1 + 4 + 1 + 4;
-  else if (coder == OctreeCoder::gap) bits += 4 + 1;
-  else if (coder == OctreeCoder::depth_gaps) bits += 4;
+  if (coder == OctreeCoder::plain || coder == OctreeCoder::planes) bits += 1 + 4 + 1 + 4;  // planes, F, flag, G
+  else if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps) bits += 4 + 1;    // F, flag
   bool any = false;
   for (std::size_t t = 0; t < seqs.size(); ++t) {
     const std::uint64_t plain = coded_bits(plan.freq[t]);
