@@ -45,7 +45,7 @@ const char* kUsage =
     "                          1 = exact)\n"
     "      --canonical DIR     also write the canonical dump of every level\n"
     "      --fast-decode       plain octrees that decode without neighbour searches: points decode\n"
-    "                          tens of times faster, streams get larger (surfaces by about half)\n"
+    "                          tens of times faster, streams get larger (surfaces by a fifth to a half)\n"
     "      --no-info           omit the ancillary info chunk\n"
     "      --json              print the report as JSON\n"
     "  dec IN.hmc -o OUT   decode the finest level (or --level K) to PLY, OBJ, XYZ, VTK, VTU, ...;\n"
