@@ -202,6 +202,15 @@ class PairedCode:
         return a
 
 
+def read_table(br, alphabet, form, flagged):
+    """A table of a layer whose tables may be paired (`flagged`: §8.5,
+    §8A.7): a flag, then a paired table (§7.4) or a code-length table;
+    otherwise a code-length table (§7.1)."""
+    if flagged and br.bits(1) == 1:
+        return PairedCode(br, alphabet, form)
+    return read_code(br, alphabet, form)
+
+
 def read_delta_lengths(br, alphabet):
     """§7.1, delta form: tokens 00 same, 01 zero run, 100 +1, 101 -1,
     1100 +2, 1101 -2, 1110 end, 1111 s ue (far: -(ue + 3) if s else
@@ -307,17 +316,12 @@ def decode_base(payload, q, n, form=1):
     neighbours = br.bits(4) if coder >= 1 else 0
     classes = br.bits(2) + 1 if coder >= 1 else 1
     ranked, tables, gaps, quadric = [], [], [], []
-
-    def table(alphabet):
-        if coder == 4 and br.bits(1) == 1:  # §8.5: a paired table (§7.4)
-            return PairedCode(br, alphabet, form)
-        return read_code(br, alphabet, form)
-
     for _ in range(q):
         ranked.append(coder >= 1 and br.bits(1) == 1)
         gaps.append(br.bits(4) if ranked[-1] and coder >= 2 else 0)  # §8.3: the depth's gap weight
         quadric.append(br.bits(1) == 1 if ranked[-1] and coder >= 3 else False)  # §8.4
-        tables.append([table(255) for _ in range(classes)] if ranked[-1] else [table(256)])
+        tables.append([read_table(br, 255, form, coder == 4) for _ in range(classes)] if ranked[-1]
+                      else [read_table(br, 256, form, coder == 4)])
         # §8.2: every ranked node costs a bit; §8.5: every pair of them when paired
         if ranked[-1] and any((t.pairs if isinstance(t, PairedCode) else t).single is not None for t in tables[-1]):
             raise DecodeError("bad_layer", "BASE: a one-symbol code at ranked depth %d" % (len(tables) - 1))
@@ -605,10 +609,7 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         for j in range(classes):
             for x in range(planes):
                 if br.bits(1) == 1:
-                    if payload[0] == 6 and br.bits(1) == 1:  # §8A.7: a paired table (§7.4)
-                        table[d][j][x] = PairedCode(br, 255, form)
-                    else:
-                        table[d][j][x] = read_code(br, 255, form)
+                    table[d][j][x] = read_table(br, 255, form, payload[0] == 6)
                 elif d > 0:
                     table[d][j][x] = table[d - 1][j][x]
     # Occupied nodes of C per depth.

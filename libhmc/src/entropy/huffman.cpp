@@ -300,6 +300,19 @@ void HuffmanCode::write(BitWriter& out, TableForm form) const {
   write_table(out, lengths_, single_, single_symbol_, form);
 }
 
+std::vector<std::uint64_t> two_symbols_at_least(std::vector<std::uint64_t> freq) {
+  auto used = std::count_if(freq.begin(), freq.end(), [](std::uint64_t v) { return v != 0; });
+  for (std::size_t x = 0; x < freq.size() && used < 2; ++x)
+    if (freq[x] == 0) freq[x] = 1, ++used;
+  return freq;
+}
+
+std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const HuffmanCode& code, TableForm form) {
+  BitWriter w;
+  code.write(w, form);
+  return w.bit_count() + code.cost(freq);
+}
+
 std::uint64_t coded_bits(const std::vector<std::uint64_t>& freq, TableForm form) {
   std::uint32_t used = 0, last = 0;
   for (std::uint32_t s = 0; s < freq.size(); ++s)

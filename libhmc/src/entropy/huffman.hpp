@@ -34,6 +34,17 @@ enum class TableForm : std::uint8_t { nibbles, deltas };
 /// both would take, computed without building the code (encoders' plans).
 std::uint64_t coded_bits(const std::vector<std::uint64_t>& freq, TableForm form = TableForm::deltas);
 
+/// The counts with unused symbols given a phantom count, the first ones
+/// first, until two symbols are used: for a code that gives codes to two
+/// symbols at least, so that each of its symbols costs a bit (spec 8.2, 8.5).
+std::vector<std::uint64_t> two_symbols_at_least(std::vector<std::uint64_t> freq);
+
+class HuffmanCode;
+/// The bits of `code`'s table in `form` plus those of the symbols counted
+/// in freq coded with it (encoders' plans, for codes built from other counts).
+std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const HuffmanCode& code,
+                                TableForm form = TableForm::deltas);
+
 /// A canonical code over an alphabet of `size` symbols.
 class HuffmanCode {
  public:

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "entropy/paired.hpp"
 
-#include <algorithm>
+#include <utility>
 
 #include "util/error.hpp"
 
@@ -17,14 +17,6 @@ void for_each_pair(const std::vector<std::uint32_t>& sequence, F&& f) {
 }
 
 bool pairs_up(std::uint32_t a, std::uint32_t b) { return a < kPairedSymbols && b < kPairedSymbols; }
-
-// Unused symbols given a phantom count, the first ones first, until two are
-// used: a code of two symbols at least.
-void two_at_least(std::vector<std::uint64_t>& freq) {
-  auto used = std::count_if(freq.begin(), freq.end(), [](std::uint64_t v) { return v != 0; });
-  for (std::size_t x = 0; x < freq.size() && used < 2; ++x)
-    if (freq[x] == 0) freq[x] = 1, ++used;
-}
 
 // The frequencies of the pair code's symbols and of the escaped symbols.
 void pair_frequencies(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet,
@@ -51,14 +43,10 @@ std::uint64_t paired_bits(const std::vector<std::uint32_t>& sequence, std::uint3
   const bool escape_used = pairs[kPairEscape] != 0;
   if (!two_codes) return coded_bits(pairs, form) + (escape_used ? coded_bits(escaped, form) : 0);
   // The phantom symbols' codes are written but never used.
-  std::vector<std::uint64_t> padded = pairs;
-  two_at_least(padded);
-  const HuffmanCode code = HuffmanCode::from_frequencies(padded);
-  BitWriter w;
-  code.write(w, form);
+  const HuffmanCode code = HuffmanCode::from_frequencies(two_symbols_at_least(pairs));
   // An escape code follows when the pair code can give the escape, even a
   // phantom one (then a one-symbol code, of no escaped symbol).
-  return w.bit_count() + code.cost(pairs) + (code.has(kPairEscape) ? coded_bits(escaped, form) : 0);
+  return table_and_symbols(pairs, code, form) + (code.has(kPairEscape) ? coded_bits(escaped, form) : 0);
 }
 
 TableCode TableCode::read(BitReader& in, std::uint32_t alphabet, bool flagged, const std::string& what,
@@ -75,22 +63,20 @@ TableCode TableCode::read(BitReader& in, std::uint32_t alphabet, bool flagged, c
   return t;
 }
 
-TableCode TableCode::build(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, bool paired,
+TableCode TableCode::build(std::vector<std::uint32_t> sequence, std::uint32_t alphabet, bool paired,
                            bool two_codes) {
   TableCode t;
   t.paired_ = paired;
-  t.sequence_ = sequence;
+  t.sequence_ = std::move(sequence);
   if (!paired) {
     std::vector<std::uint64_t> freq(alphabet, 0);
-    for (std::uint32_t s : sequence) ++freq[s];
-    if (two_codes) two_at_least(freq);
-    t.code_ = HuffmanCode::from_frequencies(freq);
+    for (std::uint32_t s : t.sequence_) ++freq[s];
+    t.code_ = HuffmanCode::from_frequencies(two_codes ? two_symbols_at_least(std::move(freq)) : freq);
     return t;
   }
   std::vector<std::uint64_t> pairs, escaped;
-  pair_frequencies(sequence, alphabet, pairs, escaped);
-  if (two_codes) two_at_least(pairs);
-  t.code_ = HuffmanCode::from_frequencies(pairs);
+  pair_frequencies(t.sequence_, alphabet, pairs, escaped);
+  t.code_ = HuffmanCode::from_frequencies(two_codes ? two_symbols_at_least(std::move(pairs)) : pairs);
   // The escape code follows whenever the pair code can give the escape (a
   // phantom escape included).
   t.escape_used_ = t.code_.has(kPairEscape);

@@ -49,7 +49,7 @@ class TableCode {
   /// The encoder's table for `sequence`, paired or not as asked; with
   /// `two_codes`, its code (the pair code when paired) gives codes to two
   /// symbols at least.
-  static TableCode build(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, bool paired,
+  static TableCode build(std::vector<std::uint32_t> sequence, std::uint32_t alphabet, bool paired,
                          bool two_codes = false);
 
   void write(BitWriter& out, bool flagged, TableForm form) const;

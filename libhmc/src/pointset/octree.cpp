@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <optional>
 #include <string>
 
@@ -305,22 +306,7 @@ class DepthNodes {
   mutable std::optional<KdTree<std::int64_t>> tree_;
 };
 
-// Bits of a code-length table plus the symbols it codes.
-std::uint64_t table_and_symbols(const std::vector<std::uint64_t>& freq, const HuffmanCode& code) {
-  BitWriter w;
-  code.write(w);
-  return w.bit_count() + code.cost(freq);
-}
 
-// A ranked depth's codes have two symbols at least (spec 8.2), so that every
-// ranked node costs a bit: the counts with unused symbols given a phantom
-// count until two are used, for building the code.
-std::vector<std::uint64_t> two_symbols_at_least(std::vector<std::uint64_t> freq) {
-  auto used = std::count_if(freq.begin(), freq.end(), [](std::uint64_t v) { return v != 0; });
-  for (std::size_t x = 0; x < freq.size() && used < 2; ++x)
-    if (freq[x] == 0) freq[x] = 1, ++used;
-  return freq;
-}
 
 // Coder 3 with `classes` contexts per ranked depth, from the plain and
 // ranked symbols of every depth (ranked[d][i], context[d][i]) and each
@@ -337,6 +323,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   // Per depth, its tables' symbol sequences in node order (one table at a
   // plain depth, `classes` at a ranked one).
   std::vector<std::vector<std::vector<std::uint32_t>>> seqs(static_cast<std::size_t>(q));
+  std::vector<std::vector<std::uint64_t>> table_bits(static_cast<std::size_t>(q));  // each table's, unpaired
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     std::vector<std::uint64_t> plain_freq(256, 0);
@@ -345,14 +332,15 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
     for (std::size_t i = 0; i < ranked_sym[sd].size(); ++i)
       ++freq[std::min<std::size_t>(context[sd][i], static_cast<std::size_t>(classes - 1))][ranked_sym[sd][i]];
     const std::uint64_t plain_bits = coded_bits(plain_freq);
-    std::uint64_t ranked_bits = 0;
-    for (const auto& f : freq) {
-      const HuffmanCode code = HuffmanCode::from_frequencies(two_symbols_at_least(f));
-      ranked_bits += table_and_symbols(f, code);
-    }
-    // Rank only where it pays for the decoder's searches: 2% of the depth.
-    ranked_bits += causal ? 5 : 4;  // the depth's weight (and quadric flag)
+    std::vector<std::uint64_t> context_bits;
+    for (const auto& f : freq)
+      context_bits.push_back(table_and_symbols(f, HuffmanCode::from_frequencies(two_symbols_at_least(f))));
+    // Rank only where it pays for the decoder's searches: 2% of the depth
+    // (the depth's weight, and quadric flag, included).
+    const std::uint64_t ranked_bits =
+        std::accumulate(context_bits.begin(), context_bits.end(), std::uint64_t{causal ? 5u : 4u});
     const bool use = !ranked_sym[sd].empty() && 100 * ranked_bits < 98 * plain_bits;
+    table_bits[sd] = use ? std::move(context_bits) : std::vector<std::uint64_t>{plain_bits};
     ranked[sd] = use;
     any_ranked = any_ranked || use;
     if (use) {
@@ -372,20 +360,13 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   std::uint64_t saved = 0, flags = 0;
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
-    const std::uint32_t alphabet = ranked[sd] ? 255 : 256;
-    for (const auto& seq : seqs[sd]) {
+    for (std::size_t j = 0; j < seqs[sd].size(); ++j) {
       ++flags;
-      bool better = false;
-      if (pairing) {
-        std::vector<std::uint64_t> f(alphabet, 0);
-        for (std::uint32_t v : seq) ++f[v];
-        const std::uint64_t plain = ranked[sd] ? table_and_symbols(f, HuffmanCode::from_frequencies(
-                                                                            two_symbols_at_least(f)))
-                                               : coded_bits(f);
-        const std::uint64_t pairs = paired_bits(seq, alphabet, TableForm::deltas, ranked[sd]);
-        if (pairs < plain) saved += plain - pairs, better = true;
-      }
-      pair[sd].push_back(better);
+      const std::uint64_t plain = table_bits[sd][j];
+      const std::uint64_t pairs =
+          pairing ? paired_bits(seqs[sd][j], ranked[sd] ? 255 : 256, TableForm::deltas, ranked[sd]) : plain;
+      if (pairs < plain) saved += plain - pairs;
+      pair[sd].push_back(pairs < plain);
     }
   }
   paired = pairing && saved > flags;
@@ -399,7 +380,8 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
     if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), 4);
     if (ranked[sd] && causal) w.put(quadric[sd] ? 1 : 0, 1);
     for (std::size_t j = 0; j < seqs[sd].size(); ++j) {
-      codes[sd].push_back(TableCode::build(seqs[sd][j], ranked[sd] ? 255 : 256, paired && pair[sd][j], ranked[sd]));
+      codes[sd].push_back(
+          TableCode::build(std::move(seqs[sd][j]), ranked[sd] ? 255 : 256, paired && pair[sd][j], ranked[sd]));
       codes[sd].back().write(w, paired, TableForm::deltas);
     }
   }

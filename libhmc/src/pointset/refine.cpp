@@ -488,10 +488,10 @@ bool pair_tables(const std::vector<Symbol>& symbols, TablePlan& plan, bool force
 
 std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const TablePlan& plan, int neighbours) {
   const bool paired = !plan.paired.empty();
-  const auto seqs = sequences(symbols, plan);
+  auto seqs = sequences(symbols, plan);
   std::vector<TableCode> codes;
   for (std::size_t t = 0; t < seqs.size(); ++t)
-    codes.push_back(TableCode::build(seqs[t], kAlphabet, paired && plan.paired[t]));
+    codes.push_back(TableCode::build(std::move(seqs[t]), kAlphabet, paired && plan.paired[t]));
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
