@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x12"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x13"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -630,21 +630,38 @@ def rice_bits(bw, ranks, k=None):
 
 
 def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, border=(), toggles=(),
-                 drops=(), class_code_bits=None, filters=None, mask=None, compact=False, group=1, toggle_bits=None):
+                 drops=(), class_code_bits=None, filters=None, mask=None, compact=False, group=1, toggle_bits=None,
+                 common=None):
     """§10. classes: the class of each of the n points (needed when K > 1);
     filters: {filter number: threshold}. compact: flag bit 2, classes in
     groups of `group` points (10.1) and `toggles` as {context: ranks} (10.2),
-    or the toggle bit stream as given in `toggle_bits`."""
+    or the toggle bit stream as given in `toggle_bits`. common: flag bit 4,
+    the classes as a list of the points outside class `common` (10.1)."""
     filters = filters or {}
     if mask is None:
         mask = sum(1 << i for i in filters)
     if compact:
         flags |= 4
+    if common is not None:
+        flags |= 16
     out = bytes([flags, scale_rank, mask]) + b"".join(varint(filters[i]) for i in sorted(filters))
     out += varint(len(multipliers)) + b"".join(varint(m) for m in multipliers)
     if len(multipliers) > 1:
         if class_code_bits is not None:
             out += class_code_bits
+        elif common is not None:
+            K = len(multipliers)
+            listed = [v for v, c in enumerate(classes) if c != common]
+            bw = BitWriter()
+            bw.put(common, 6)
+            rice_bits(bw, listed)
+            if K > 2:
+                symbols = [c - (c > common) for c in classes if c != common]
+                c = Coder(symbols or [0], K - 1)
+                c.table(bw)
+                for sym in symbols:
+                    c.put(bw, sym)
+            out += bw.bytes()
         elif compact:
             K = len(multipliers)
             padded = list(classes) + [0] * (-len(classes) % group)
@@ -1190,6 +1207,24 @@ def hb_rcon_compact_surface():
     return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
 
 
+def hb_rcon_class_list():
+    # Flag bit 4: classes as the points outside a common class. K = 3 with
+    # common class 1 (listed points of classes 0 and 2, so the symbols map
+    # around it); K = 2 with common class 1 and nobody listed; K = 64 with
+    # common class 40 and a few points of classes on both sides of it.
+    q = 6
+    pts = sphere_pts(200, q, 41)
+    lv = nested(pts, [50, 110, 200], 42)
+    n0, n1, n2 = len(lv[0]), len(lv[1]), len(lv[2])
+    r = random.Random(43)
+    rc0 = rcon_payload(n0, flags=1, multipliers=(400, 900, 3000), compact=True, common=1,
+                       classes=[1 if r.random() < 0.8 else r.choice((0, 2)) for _ in range(n0)], toggles={2: (1, 4)})
+    rc1 = rcon_payload(n1, flags=1, multipliers=(500, 1500), compact=True, common=1, classes=[1] * n1)
+    rc2 = rcon_payload(n2, flags=1, multipliers=tuple(range(100, 100 + 64 * 60, 60)), compact=True, common=40,
+                       classes=[40 if i % 17 else (i * 7) % 64 for i in range(n2)], toggles={6: (0, 2)})
+    return hand_stream(1, q, lv, [(4, 1, True), (4, 2, True)], rcons=[rc0, rc1, rc2])
+
+
 def hb_rcon_compact_volume():
     q = 5
     pts = rand_pts(120, q, 34)
@@ -1561,6 +1596,8 @@ HANDBUILT = [
      "BASE coder 1 with neighbours = 0 (children by number, so every node in context 0) and two contexts, in a surface stream", sec("base", "refn", "rcon", "recon")),
     ("rcon-compact-surface", hb_rcon_compact_surface, F,
      "hand-written compact RCON (flag bit 2): classes in groups of 3 and 8 points, toggle ranks in five contexts, border and drop lists", sec("rcon", "recon")),
+    ("rcon-class-list", hb_rcon_class_list, F,
+     "hand-written compact RCON with class lists (flag bit 4): K = 3 around common class 1, K = 2 with no point listed, K = 64 around common class 40", sec("rcon", "recon")),
     ("rcon-compact-volume", hb_rcon_compact_volume, F,
      "hand-written compact RCON for a volume: repair then toggles by context, K = 64 in groups of 2 (4096 symbols)", sec("rcon", "recon")),
     ("rcon-handbuilt-volume", hb_rcon_volume, F,
@@ -1845,8 +1882,15 @@ NEGATIVE = [
     ("neg-refn-count", "bad_layer", P, "a REFN adding two points where one is declared", ["8A.1", "13"],
      lambda: stream_q1_refn(refn_single(8))),
     # RCON
-    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x10 (a reserved bit)", ["10", "13"],
+    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x20 (a reserved bit)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, flags=32))),
+    ("neg-rcon-class-list-loose", "bad_layer", P, "RCON flag bit 4 (class_list) without compact", ["10", "13"],
      lambda: surface_one_level(rcon_payload(30, flags=16))),
+    ("neg-rcon-class-list-common", "bad_layer", P, "a class list whose common class is 3 of 3", ["10.1", "13"],
+     lambda: surface_one_level(rcon_payload(30, multipliers=(300, 600, 900), compact=True, common=3, classes=[3] * 30))),
+    ("neg-rcon-class-list-entry", "bad_layer", P, "a class list whose last entry is point 30 of 30", ["10.1", "13"],
+     lambda: surface_one_level(rcon_payload(30, multipliers=(300, 600), compact=True, common=0,
+                                            class_code_bits=bits_payload(lambda bw: (bw.put(0, 6), rice_bits(bw, [3, 30])))))),
     ("neg-rcon-class-alphabet", "bad_layer", P, "compact classes: K = 17 in groups of 3 (4913 symbols > 4096)", ["10.1", "13"],
      lambda: surface_one_level(rcon_payload(30, multipliers=tuple(range(300, 317)), compact=True,
                                             class_code_bits=bits_payload(lambda bw: (bw.put(2, 3), bw.put(1, 1), bw.put(0, 13)))))),

@@ -712,12 +712,40 @@ def decode_vq(payload, q, coarse, n, codebook, form=1):
 # ---------------------------------------------------------------- §10 RCON
 
 
+def rice_list(br, what):
+    """§10.2: one list, a count then, if not empty, a Rice parameter and the
+    Rice-coded gaps between its ascending entries."""
+    count = br.ue()
+    if count > len(br.data) * 8 - br.pos:
+        raise DecodeError("bad_layer", "RCON: %s count %d above the bits left" % (what, count))
+    out = []
+    if count == 0:
+        return out
+    k = br.bits(5)
+    prev = -1
+    for _ in range(count):
+        q = 0
+        while br.bit() == 1:
+            q += 1
+            if q << k >= INDEX_BOUND:
+                raise DecodeError("bad_layer", "RCON: %s >= 2^32 - 1" % what)
+        v = prev + 1 + (q << k) + br.bits(k)
+        if v >= INDEX_BOUND:
+            raise DecodeError("bad_layer", "RCON: %s %d >= 2^32 - 1" % (what, v))
+        out.append(v)
+        prev = v
+    return out
+
+
 def parse_rcon(payload, n, form=1):
     r = ByteReader(payload, "bad_layer", "RCON")
     flags = r.u8()
-    if flags & 0xF0:  # bit 3 (inherit_border) changes only what the border list means
+    if flags & 0xE0:  # bit 3 (inherit_border) changes only what the border list means
         r.fail("reserved flag bits set (flags = %d)" % flags)
     compact = flags >> 2 & 1
+    class_list = flags >> 4 & 1
+    if class_list and not compact:
+        r.fail("class_list (flag bit 4) without compact")
     k = r.u8()
     if not 1 <= k <= 64:
         r.fail("scale_rank %d out of range" % k)
@@ -748,7 +776,19 @@ def parse_rcon(payload, n, form=1):
     if K > 1:
         counts = [0] * K
         br = BitReader(payload, r.pos, "bad_layer", "RCON classes")
-        if compact:  # §10.1: classes in groups of G points, digits base K
+        if class_list:  # §10.1: the common class d, the other points listed as in §10.2
+            d = br.bits(6)
+            if d >= K:
+                raise DecodeError("bad_layer", "RCON: common class %d of %d" % (d, K))
+            listed = rice_list(br, "class list entry")
+            if listed and listed[-1] >= n:
+                raise DecodeError("bad_layer", "RCON: class list entry %d >= %d points" % (listed[-1], n))
+            counts[d] = n - len(listed)
+            code = read_code(br, K - 1, form) if K > 2 else None
+            for _ in listed:
+                s = code.decode(br, "bad_layer") if code else 0
+                counts[s if s < d else s + 1] += 1
+        elif compact:  # §10.1: classes in groups of G points, digits base K
             G = br.bits(3) + 1
             A = K ** G
             if A > 4096:
@@ -798,25 +838,9 @@ def parse_rcon(payload, n, form=1):
         # are checked against the contexts only when reconstructing.
         br = BitReader(payload, r.pos, "bad_layer", "RCON toggles")
         for j in range(8):
-            count = toggles[j] = br.ue()
-            if count > len(payload) * 8 - br.pos:
-                raise DecodeError("bad_layer", "RCON: toggle count %d of context %d above the bits left" % (count, j))
-            if count == 0:
-                continue
-            k = br.bits(5)
-            prev = -1
-            for _ in range(count):
-                q = 0
-                while br.bit() == 1:
-                    q += 1
-                    if q << k >= INDEX_BOUND:
-                        raise DecodeError("bad_layer", "RCON: toggle rank of context %d >= 2^32 - 1" % j)
-                v = prev + 1 + (q << k) + br.bits(k)
-                if v >= INDEX_BOUND:
-                    raise DecodeError("bad_layer", "RCON: toggle rank %d of context %d >= 2^32 - 1" % (v, j))
-                prev = v
+            toggles[j] = len(rice_list(br, "toggle rank of context %d" % j))
         br.finish()
-    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "scale_rank": k, "filters": thresholds,
+    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list, "scale_rank": k, "filters": thresholds,
             "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
             "drops": len(drops)}
 

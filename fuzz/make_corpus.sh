@@ -66,7 +66,7 @@ done
 rm -rf "$CORPUS"
 mkdir -p "$CORPUS"
 python3 - "$WORK" "$CORPUS" "$ROOT" <<'EOF'
-import glob, os, struct, sys, zlib
+import glob, math, os, struct, sys, zlib
 
 work, corpus, root = sys.argv[1], sys.argv[2], sys.argv[3]
 MAX_FILE = 64 * 1024
@@ -330,6 +330,18 @@ for case in ("refn-paired-escapes", "refn-paired-single"):
     fine = dump_points(os.path.join(folder, "expected", "level-%d.points" % (levels - 2)))
     common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
     put("refine_layer", case, common + (len(fine) - len(coarse) - 1).to_bytes(2, "little") + bytes([5]) + refn[0][1:])
+
+# A class list (RCON flag bit 4) over 30 points of a sphere: K = 3 around
+# common class 1, points 4 and 20 listed (Rice parameter 3), classes 0 and 2.
+sphere = sorted({(128 + round(90 * math.cos(a) * math.cos(b)), 128 + round(90 * math.sin(a) * math.cos(b)),
+                  128 + round(90 * math.sin(b))) for a, b in ((i * 2.4, (i % 7 - 3) * 0.4) for i in range(30))})
+b = Bits()
+b.put(1, 6); b.ue(2); b.put(3, 5)
+b.put(0, 1); b.put(4, 3); b.put(0b10, 2); b.put(7, 3)  # gap 4, then gap 15 = 1·8 + 7
+b.put(0, 1); b.put(1, 4); b.put(1, 4)                 # 4-bit table with A = 2: lengths 1, 1
+b.put(0, 1); b.put(1, 1)                              # point 4 class 0, point 20 class 2
+rc = bytes([1 | 4 | 16, 6, 0, 3]) + varint(400) + varint(900) + varint(3000) + b.bytes() + bytes([0, 0, 0xff])
+put("recon", "class-list", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
 
 # --- roundtrip: q - 1, flags, seed, then 12 bytes per point --------------
 def rt(q, flags, seed, coords, fmt):

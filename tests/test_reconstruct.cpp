@@ -750,6 +750,64 @@ TEST_CASE("compact RCON: toggles by context decode to the same mesh as toggles b
   CHECK(d_legacy.levels.back().triangles == e.triangles);
 }
 
+TEST_CASE("compact RCON: a class list where one class holds nearly every point, and its errors") {
+  std::uint64_t seed = 11;
+  auto next = [&]() { return seed = seed * 6364136223846793005ull + 1442695040888963407ull, seed >> 33; };
+  for (std::uint32_t k : {2u, 3u, 64u}) {
+    for (std::uint64_t n : {1u, 40u, 5000u}) {
+      CAPTURE(k);
+      CAPTURE(n);
+      ReconParams p;
+      p.multipliers.clear();
+      for (std::uint32_t i = 0; i < k; ++i) p.multipliers.push_back(100 + 10 * i);
+      // Class k / 2 everywhere but at one point in 200, whose class is any.
+      p.vertex_class.assign(n, static_cast<std::uint8_t>(k / 2));
+      for (auto& v : p.vertex_class)
+        if (next() % 200 == 0) v = static_cast<std::uint8_t>(next() % k);
+      p.toggle_ranks[3] = {2, 9};
+      const auto bytes = write_recon(p);
+      const auto back = read_payload(bytes, n);
+      CHECK(back.vertex_class == p.vertex_class);
+      CHECK(back.toggle_ranks == p.toggle_ranks);
+      // Groups cost a bit per group at least: the list is shorter for 5000.
+      if (n == 5000) CHECK((bytes[0] & 16) != 0);
+      // Balanced classes stay in groups.
+      for (auto& v : p.vertex_class) v = static_cast<std::uint8_t>(next() % k);
+      const auto balanced = write_recon(p);
+      CHECK((balanced[0] & 16) == 0);
+      CHECK(read_payload(balanced, n).vertex_class == p.vertex_class);
+    }
+  }
+  // Hand-made: flags peel | compact | class_list, K classes, then the list.
+  auto payload = [](std::uint8_t flags, std::uint32_t classes, std::uint32_t common, std::vector<std::uint32_t> gaps) {
+    ByteWriter w;
+    w.u8(flags), w.u8(6), w.u8(0), w.varint(classes);
+    for (std::uint32_t i = 0; i < classes; ++i) w.varint(300 + i);
+    BitWriter bw;
+    bw.put(common, 6);
+    bw.exp_golomb(static_cast<std::uint32_t>(gaps.size()));
+    if (!gaps.empty()) {
+      bw.put(3, 5);  // Rice parameter 3: gaps below 8 take four bits
+      for (auto g : gaps) bw.put(0, 1), bw.put(g, 3);
+    }
+    if (classes > 2) bw.put(1, 1), bw.put(1, 1);  // a one-symbol code: symbol 1 of K - 1
+    w.bytes(bw.finish());
+    w.varint(0), w.varint(0);  // border, drops
+    w.u8(0xff);                // eight empty toggle contexts
+    return w.data();
+  };
+  CHECK(read_payload(payload(21, 2, 1, {2, 0}), 5).vertex_class == std::vector<std::uint8_t>{1, 1, 0, 0, 1});
+  // K = 3 around common class 0: symbol 1 is class 2.
+  CHECK(read_payload(payload(21, 3, 0, {4}), 5).vertex_class == std::vector<std::uint8_t>{0, 0, 0, 0, 2});
+  // Around common class 2: symbol 1 is class 1.
+  CHECK(read_payload(payload(21, 3, 2, {0}), 2).vertex_class == std::vector<std::uint8_t>{1, 2});
+  CHECK(payload_status(payload(21, 3, 2, {4}), 4) == Status::bad_layer);  // point 4 of 4
+  CHECK(payload_status(payload(21, 3, 3, {}), 4) == Status::bad_layer);   // common class 3 of 3
+  CHECK(payload_status(payload(17, 2, 0, {}), 4) == Status::bad_layer);   // class_list without compact
+  CHECK(payload_status(payload(21 | 32, 2, 0, {}), 4) == Status::bad_layer);  // reserved bit 5
+  CHECK(payload_status(payload(21, 2, 0, {}), 4) == Status::ok);
+}
+
 TEST_CASE("compact RCON: classes in groups survive a round trip and their errors are bad_layer") {
   std::uint64_t seed = 7;
   auto next = [&]() { return seed = seed * 6364136223846793005ull + 1442695040888963407ull, seed >> 33; };

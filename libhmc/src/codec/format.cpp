@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "codec/format.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -219,62 +220,126 @@ std::vector<std::uint8_t> read_class_groups(BitReader& br, std::uint32_t classes
   return cls;
 }
 
-// Toggle ranks per context (spec section 10, compact form): a count, and
-// the gaps between ranks with a Rice code whose parameter the encoder picks.
+// A sorted list of distinct indices as one context of spec 10.2: a count,
+// and the gaps between entries in a Rice code whose parameter the encoder
+// picks (the toggle ranks of each context, the points of a class list).
+void write_rice_list(BitWriter& bw, const std::vector<std::uint32_t>& list) {
+  bw.exp_golomb(static_cast<std::uint32_t>(list.size()));
+  if (list.empty()) return;
+  std::vector<std::uint64_t> gaps;
+  std::uint64_t next = 0;
+  for (std::uint32_t v : list) gaps.push_back(v - next), next = std::uint64_t{v} + 1;
+  int best_k = 0;
+  std::uint64_t best_bits = ~std::uint64_t{0};
+  for (int k = 0; k < 32; ++k) {
+    std::uint64_t bits = 0;
+    for (auto g : gaps) bits += (g >> k) + 1 + static_cast<std::uint64_t>(k);
+    if (bits < best_bits) best_bits = bits, best_k = k;
+  }
+  bw.put(static_cast<std::uint32_t>(best_k), 5);
+  for (auto g : gaps) {
+    for (std::uint64_t q = g >> best_k; q > 0; --q) bw.put(1, 1);
+    bw.put(0, 1);
+    if (best_k > 0) bw.put(static_cast<std::uint32_t>(g & ((std::uint64_t{1} << best_k) - 1)), best_k);
+  }
+}
+
+// Reads one list written by write_rice_list; `what` names it in errors.
+std::vector<std::uint32_t> read_rice_list(BitReader& br, const std::string& what) {
+  const std::uint64_t count = br.exp_golomb();
+  // Each entry takes at least one bit.
+  if (count > br.bits_left())
+    fail(Status::bad_layer, "RCON: " + what + " count " + std::to_string(count) + " is larger than the bits left");
+  std::vector<std::uint32_t> list;
+  if (count == 0) return list;
+  const int k = static_cast<int>(br.get(5));
+  list.resize(count);
+  std::uint64_t next = 0;
+  for (auto& v : list) {
+    std::uint64_t q = 0;
+    while (br.get(1) == 1)
+      if ((++q << k) >= kIndexBound) fail(Status::bad_layer, "RCON: " + what + " out of range");
+    const std::uint64_t x = next + (q << k) + (k > 0 ? br.get(k) : 0u);
+    if (x >= kIndexBound) fail(Status::bad_layer, "RCON: " + what + " " + std::to_string(x) + " out of range");
+    v = static_cast<std::uint32_t>(x);
+    next = x + 1;
+  }
+  return list;
+}
+
+// Toggle ranks per context (spec section 10, compact form): one list each.
 std::vector<std::uint8_t> write_toggle_ranks(const std::array<std::vector<std::uint32_t>, kToggleContexts>& ranks) {
   BitWriter bw;
-  for (const auto& list : ranks) {
-    bw.exp_golomb(static_cast<std::uint32_t>(list.size()));
-    if (list.empty()) continue;
-    std::vector<std::uint64_t> gaps;
-    std::uint64_t next = 0;
-    for (std::uint32_t v : list) gaps.push_back(v - next), next = std::uint64_t{v} + 1;
-    int best_k = 0;
-    std::uint64_t best_bits = ~std::uint64_t{0};
-    for (int k = 0; k < 32; ++k) {
-      std::uint64_t bits = 0;
-      for (auto g : gaps) bits += (g >> k) + 1 + static_cast<std::uint64_t>(k);
-      if (bits < best_bits) best_bits = bits, best_k = k;
-    }
-    bw.put(static_cast<std::uint32_t>(best_k), 5);
-    for (auto g : gaps) {
-      for (std::uint64_t q = g >> best_k; q > 0; --q) bw.put(1, 1);
-      bw.put(0, 1);
-      if (best_k > 0) bw.put(static_cast<std::uint32_t>(g & ((std::uint64_t{1} << best_k) - 1)), best_k);
-    }
-  }
+  for (const auto& list : ranks) write_rice_list(bw, list);
   return bw.finish();
 }
 
 std::array<std::vector<std::uint32_t>, kToggleContexts> read_toggle_ranks(BitReader& br) {
   std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
-  for (auto& list : ranks) {
-    const std::uint64_t count = br.exp_golomb();
-    // Each entry takes at least one bit.
-    if (count > br.bits_left())
-      fail(Status::bad_layer, "RCON: toggle count " + std::to_string(count) + " is larger than the bits left");
-    if (count == 0) continue;
-    const int k = static_cast<int>(br.get(5));
-    list.resize(count);
-    std::uint64_t next = 0;
-    for (auto& v : list) {
-      std::uint64_t q = 0;
-      while (br.get(1) == 1)
-        if ((++q << k) >= kIndexBound) fail(Status::bad_layer, "RCON: toggle rank out of range");
-      const std::uint64_t x = next + (q << k) + (k > 0 ? br.get(k) : 0u);
-      if (x >= kIndexBound) fail(Status::bad_layer, "RCON: toggle rank " + std::to_string(x) + " out of range");
-      v = static_cast<std::uint32_t>(x);
-      next = x + 1;
+  for (auto& list : ranks) list = read_rice_list(br, "toggle rank");
+  return ranks;
+}
+
+// Classes as a list (spec 10.1, class_list): the common class, the points
+// of the other classes as one list of 10.2 and, with three classes or more,
+// one code for which other class each listed point has.
+std::vector<std::uint8_t> write_class_list(const std::vector<std::uint8_t>& cls, std::uint32_t classes) {
+  std::vector<std::uint64_t> count(classes, 0);
+  for (auto c : cls) ++count[c];
+  const auto common = static_cast<std::uint32_t>(std::max_element(count.begin(), count.end()) - count.begin());
+  std::vector<std::uint32_t> others;
+  std::vector<std::uint32_t> sym;
+  for (std::size_t v = 0; v < cls.size(); ++v)
+    if (cls[v] != common) others.push_back(static_cast<std::uint32_t>(v)), sym.push_back(cls[v] - (cls[v] > common));
+  BitWriter bw;
+  bw.put(common, 6);
+  write_rice_list(bw, others);
+  if (classes > 2) {
+    std::vector<std::uint64_t> freq(classes - 1, 0);
+    for (auto s : sym) ++freq[s];
+    const auto code = HuffmanCode::from_frequencies(freq);
+    code.write(bw);
+    for (auto s : sym) code.encode(bw, s);
+  }
+  return bw.finish();
+}
+
+std::vector<std::uint8_t> read_class_list(BitReader& br, std::uint32_t classes, std::uint64_t points, TableForm form) {
+  const std::uint32_t common = br.get(6);
+  if (common >= classes)
+    fail(Status::bad_layer, "RCON: common class " + std::to_string(common) + " of " + std::to_string(classes));
+  const auto others = read_rice_list(br, "class list entry");
+  if (!others.empty() && others.back() >= points)
+    fail(Status::bad_layer, "RCON: class list entry " + std::to_string(others.back()) + " is not below the " +
+                                std::to_string(points) + " points");
+  std::vector<std::uint8_t> cls(points, static_cast<std::uint8_t>(common));
+  if (classes == 2) {
+    for (auto v : others) cls[v] = static_cast<std::uint8_t>(1 - common);
+  } else {
+    const auto code = HuffmanCode::read(br, classes - 1, "RCON class list table", form);
+    for (auto v : others) {
+      const std::uint32_t s = code.decode(br);
+      cls[v] = static_cast<std::uint8_t>(s + (s >= common));
     }
   }
-  return ranks;
+  return cls;
 }
 
 }  // namespace
 
 std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   ByteWriter w;
-  w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0) | (p.border_delta ? 8 : 0)));
+  // The compact form's classes: in groups or as a list, whichever is shorter.
+  std::vector<std::uint8_t> classes;
+  bool class_list = false;
+  if (p.compact && p.multipliers.size() > 1) {
+    const auto k = static_cast<std::uint32_t>(p.multipliers.size());
+    classes = write_class_groups(p.vertex_class, k);
+    auto list = write_class_list(p.vertex_class, k);
+    if (list.size() < classes.size()) classes = std::move(list), class_list = true;
+  }
+  w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0) | (p.border_delta ? 8 : 0) |
+                                 (class_list ? 16 : 0)));
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
@@ -286,7 +351,7 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   for (std::uint32_t m : p.multipliers) w.varint(m);
   if (p.multipliers.size() > 1) {
     if (p.compact) {
-      w.bytes(write_class_groups(p.vertex_class, static_cast<std::uint32_t>(p.multipliers.size())));
+      w.bytes(classes);
     } else {
       std::vector<std::uint64_t> freq(p.multipliers.size(), 0);
       for (auto c : p.vertex_class) ++freq[c];
@@ -313,11 +378,13 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
-  if (flags > 15) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
+  if (flags > 31) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
   p.peel = flags & 1;
   p.repair = (flags & 2) != 0;
   p.compact = (flags & 4) != 0;
   p.border_delta = (flags & 8) != 0;
+  const bool class_list = (flags & 16) != 0;
+  if (class_list && !p.compact) fail(Status::bad_layer, "RCON: a class list (flag bit 4) without the compact form");
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");
@@ -343,7 +410,8 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   if (k > 1) {
     BitReader br(r.here(), r.remaining(), "RCON classes");
     if (p.compact) {
-      p.vertex_class = read_class_groups(br, static_cast<std::uint32_t>(k), points, form);
+      p.vertex_class = class_list ? read_class_list(br, static_cast<std::uint32_t>(k), points, form)
+                                  : read_class_groups(br, static_cast<std::uint32_t>(k), points, form);
     } else {
       const auto code = HuffmanCode::read(br, static_cast<std::uint32_t>(k), "RCON class table", form);
       p.vertex_class.resize(points);
