@@ -478,4 +478,9 @@ TEST_CASE("the info chunk carries encoder statistics and can be omitted") {
   EncodeOptions o;
   o.write_info = false;
   CHECK(decode_ok(encode(m, o).value().bytes).info.empty());
+  // Without duplicates the point counts are the stream's own: only the encoder.
+  const auto plain = decode_ok(encode(samples::torus(12, 8)).value().bytes);
+  REQUIRE(plain.info.size() == 1);
+  CHECK(plain.info[0].first == "encoder");
+  CHECK(plain.info[0].second.rfind("hmc ", 0) == 0);
 }

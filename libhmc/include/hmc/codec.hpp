@@ -91,7 +91,7 @@ struct EncodeOptions {
   /// The kind to record; when unset it is detected from the input
   /// (tetrahedra: volume; triangles: surface; neither: points).
   std::optional<Kind> kind;
-  /// Write the ancillary `info` chunk (encoder name, input statistics).
+  /// Write the ancillary `info` chunk (the encoder and, when points were merged, the input count).
   bool write_info = true;
   /// Reconstruction side information (surface and volume kinds).
   Fidelity fidelity = Fidelity::shape;

@@ -98,10 +98,14 @@ InputOnGrid input_on_grid(const Mesh& input, const std::vector<GridPoint>& quant
   return g;
 }
 
+// What the stream does not say itself: the encoder and, when quantization
+// merged points, how many the input had (otherwise the finest level's count).
 std::vector<std::uint8_t> info_payload(const EncodeReport& r) {
   std::string s = std::string("encoder=hmc ") + version_string() + "\n";
-  s += "input_points=" + std::to_string(r.input_points) + "\n";
-  s += "duplicates_merged=" + std::to_string(r.duplicates_merged) + "\n";
+  if (r.duplicates_merged > 0) {
+    s += "input_points=" + std::to_string(r.input_points) + "\n";
+    s += "duplicates_merged=" + std::to_string(r.duplicates_merged) + "\n";
+  }
   return {s.begin(), s.end()};
 }
 
