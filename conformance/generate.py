@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x13"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x14"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -631,12 +631,13 @@ def rice_bits(bw, ranks, k=None):
 
 def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, border=(), toggles=(),
                  drops=(), class_code_bits=None, filters=None, mask=None, compact=False, group=1, toggle_bits=None,
-                 common=None):
+                 common=None, candidate_contexts=False):
     """§10. classes: the class of each of the n points (needed when K > 1);
     filters: {filter number: threshold}. compact: flag bit 2, classes in
     groups of `group` points (10.1) and `toggles` as {context: ranks} (10.2),
     or the toggle bit stream as given in `toggle_bits`. common: flag bit 4,
-    the classes as a list of the points outside class `common` (10.1)."""
+    the classes as a list of the points outside class `common` (10.1).
+    candidate_contexts: flag bit 5, 40 toggle contexts (11.5)."""
     filters = filters or {}
     if mask is None:
         mask = sum(1 << i for i in filters)
@@ -644,6 +645,8 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
         flags |= 4
     if common is not None:
         flags |= 16
+    if candidate_contexts:
+        flags |= 32
     out = bytes([flags, scale_rank, mask]) + b"".join(varint(filters[i]) for i in sorted(filters))
     out += varint(len(multipliers)) + b"".join(varint(m) for m in multipliers)
     if len(multipliers) > 1:
@@ -694,7 +697,7 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
     if toggle_bits is None:
         bw = BitWriter()
         toggles = toggles or {}
-        for j in range(8):
+        for j in range(40 if candidate_contexts else 8):
             rice_bits(bw, sorted(toggles.get(j, ())))
         toggle_bits = bw.bytes()
     return out + gaps(border) + gaps(drops) + toggle_bits
@@ -1225,6 +1228,21 @@ def hb_rcon_class_list():
     return hand_stream(1, q, lv, [(4, 1, True), (4, 2, True)], rcons=[rc0, rc1, rc2])
 
 
+def hb_rcon_candidate_contexts():
+    # Flag bit 5: 40 toggle contexts, 8 per count of candidate faces. Each
+    # listed context holds 4 tetrahedra at least on its level (contexts 0, 8,
+    # 9, 16, 17, 33, 34 and 36-39 on both, 21 on the first, 18 on the second).
+    q = 6
+    pts = sphere_pts(160, q, 44)
+    lv = nested(pts, [60, 160], 45)
+    n0, n1 = len(lv[0]), len(lv[1])
+    rc0 = rcon_payload(n0, flags=1, multipliers=(900,), compact=True, candidate_contexts=True,
+                       toggles={9: (0,), 16: (0, 2), 21: (3,), 36: (1,)})
+    rc1 = rcon_payload(n1, flags=1, multipliers=(700, 1800), compact=True, candidate_contexts=True, group=2,
+                       classes=[i % 3 // 2 for i in range(n1)], toggles={0: (0,), 8: (1,), 18: (2,), 39: (0, 3)})
+    return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
+
+
 def hb_rcon_compact_volume():
     q = 5
     pts = rand_pts(120, q, 34)
@@ -1598,6 +1616,8 @@ HANDBUILT = [
      "hand-written compact RCON (flag bit 2): classes in groups of 3 and 8 points, toggle ranks in five contexts, border and drop lists", sec("rcon", "recon")),
     ("rcon-class-list", hb_rcon_class_list, F,
      "hand-written compact RCON with class lists (flag bit 4): K = 3 around common class 1, K = 2 with no point listed, K = 64 around common class 40", sec("rcon", "recon")),
+    ("rcon-candidate-contexts", hb_rcon_candidate_contexts, F,
+     "hand-written compact RCON with candidate contexts (flag bit 5): toggle ranks in contexts 0-39 of two levels of a sphere", sec("rcon", "recon")),
     ("rcon-compact-volume", hb_rcon_compact_volume, F,
      "hand-written compact RCON for a volume: repair then toggles by context, K = 64 in groups of 2 (4096 symbols)", sec("rcon", "recon")),
     ("rcon-handbuilt-volume", hb_rcon_volume, F,
@@ -1882,7 +1902,9 @@ NEGATIVE = [
     ("neg-refn-count", "bad_layer", P, "a REFN adding two points where one is declared", ["8A.1", "13"],
      lambda: stream_q1_refn(refn_single(8))),
     # RCON
-    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x20 (a reserved bit)", ["10", "13"],
+    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x40 (a reserved bit)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, flags=64))),
+    ("neg-rcon-candidate-loose", "bad_layer", P, "RCON flag bit 5 (candidate_contexts) without compact", ["10", "13"],
      lambda: surface_one_level(rcon_payload(30, flags=32))),
     ("neg-rcon-class-list-loose", "bad_layer", P, "RCON flag bit 4 (class_list) without compact", ["10", "13"],
      lambda: surface_one_level(rcon_payload(30, flags=16))),
@@ -1956,6 +1978,7 @@ NEGATIVE = [
                                       ["BASE", base_payload([(0, 0, 0)], 1)], ["HEND", b""]])),
     ("neg-rcon-toggle-range", "bad_layer", F, "a toggle index equal to the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
     ("neg-rcon-toggle-rank-range", "bad_layer", F, "a compact toggle rank equal to the number of tetrahedra of its context (full profile only)", ["10.2", "11.5", "13"], None),
+    ("neg-rcon-candidate-rank-range", "bad_layer", F, "candidate contexts: a toggle rank of context 17 equal to the number of tetrahedra (full profile only)", ["10.2", "11.5", "13"], None),
     ("neg-rcon-drop-range", "bad_layer", F, "a drop index equal to four times the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
 ]
 
@@ -2023,13 +2046,15 @@ LATE = {
 }
 
 
-def toggle_range_stream(drops=False, rank=False):
+def toggle_range_stream(drops=False, rank=False, candidates=False):
     """A surface on the 8 corners of the unit cube, whose tetrahedralization
     has 6 tetrahedra (delaunay.md §3.3): toggle 6 or drop 24 is out of range,
     and so is rank 6 in every context, since no context has more than 6."""
     pts = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
     if drops:
         rc = rcon_payload(8, drops=(24,))
+    elif candidates:
+        rc = rcon_payload(8, compact=True, candidate_contexts=True, toggles={17: (6,)})
     elif rank:
         rc = rcon_payload(8, compact=True, toggles={j: (6,) for j in range(8)})
     else:
@@ -2120,6 +2145,9 @@ def build(hmc, out):
             meta["built_by"] = "generate.py toggle_range_stream"
         elif name == "neg-rcon-toggle-rank-range":
             data = toggle_range_stream(rank=True)
+            meta["built_by"] = "generate.py toggle_range_stream"
+        elif name == "neg-rcon-candidate-rank-range":
+            data = toggle_range_stream(candidates=True)
             meta["built_by"] = "generate.py toggle_range_stream"
         elif name == "neg-rcon-drop-range":
             data = toggle_range_stream(drops=True)

@@ -740,12 +740,15 @@ def rice_list(br, what):
 def parse_rcon(payload, n, form=1):
     r = ByteReader(payload, "bad_layer", "RCON")
     flags = r.u8()
-    if flags & 0xE0:  # bit 3 (inherit_border) changes only what the border list means
+    if flags & 0xC0:  # bit 3 (inherit_border) changes only what the border list means
         r.fail("reserved flag bits set (flags = %d)" % flags)
     compact = flags >> 2 & 1
     class_list = flags >> 4 & 1
     if class_list and not compact:
         r.fail("class_list (flag bit 4) without compact")
+    candidate_contexts = flags >> 5 & 1  # §11.5: 40 toggle contexts instead of 8
+    if candidate_contexts and not compact:
+        r.fail("candidate_contexts (flag bit 5) without compact")
     k = r.u8()
     if not 1 <= k <= 64:
         r.fail("scale_rank %d out of range" % k)
@@ -827,7 +830,7 @@ def parse_rcon(payload, n, form=1):
         return out
 
     border = index_list("border", n)
-    toggles = [0] * 8
+    toggles = [0] * (40 if candidate_contexts else 8)
     if not compact:
         toggles = len(index_list("toggle", None))  # checked against the tetrahedra only when reconstructing
         drops = index_list("drop", None)
@@ -837,10 +840,10 @@ def parse_rcon(payload, n, form=1):
         # §10.2: per context, a count and Rice-coded gaps of ranks; the ranks
         # are checked against the contexts only when reconstructing.
         br = BitReader(payload, r.pos, "bad_layer", "RCON toggles")
-        for j in range(8):
+        for j in range(len(toggles)):
             toggles[j] = len(rice_list(br, "toggle rank of context %d" % j))
         br.finish()
-    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list, "scale_rank": k, "filters": thresholds,
+    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list, "candidate_contexts": candidate_contexts, "scale_rank": k, "filters": thresholds,
             "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
             "drops": len(drops)}
 

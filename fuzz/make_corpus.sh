@@ -343,6 +343,16 @@ b.put(0, 1); b.put(1, 1)                              # point 4 class 0, point 2
 rc = bytes([1 | 4 | 16, 6, 0, 3]) + varint(400) + varint(900) + varint(3000) + b.bytes() + bytes([0, 0, 0xff])
 put("recon", "class-list", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
 
+# Candidate contexts (RCON flag bit 5): 40 toggle lists, rank 1 in context 9.
+b = Bits()
+for j in range(40):
+    if j == 9:
+        b.ue(1); b.put(0, 5); b.put(0b10, 2)  # Rice parameter 0: gap 1 is 10
+    else:
+        b.ue(0)
+rc = bytes([1 | 4 | 32, 6, 0, 1]) + varint(900) + bytes([0, 0]) + b.bytes()
+put("recon", "candidate-contexts", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
+
 # --- roundtrip: q - 1, flags, seed, then 12 bytes per point --------------
 def rt(q, flags, seed, coords, fmt):
     return bytes([q - 1, flags, seed]) + b"".join(struct.pack("<3" + fmt, *c) for c in coords)

@@ -339,18 +339,23 @@ TEST_CASE("RCON syntax errors are bad_layer, misplaced RCON is bad_chunk") {
   p = ok;
   p.toggle_ranks[3] = {100000000};
   CHECK(with_recon(p) == Status::bad_layer);  // no such rank in its context
-  for (int j = 0; j < kToggleContexts; ++j) {
+  const auto dt = delaunay(e.points);
+  std::vector<std::uint8_t> cand;
+  const auto labels = rule_labels(e.points, dt, local_scale(e.points, dt, 6), ReconParams{}, &cand);
+  for (int j = 0; j < kLabelContexts + kToggleContexts; ++j) {
     CAPTURE(j);
     // One past the last tetrahedron of each context: count the context.
-    const auto dt = delaunay(e.points);
-    const auto labels = rule_labels(e.points, dt, local_scale(e.points, dt, 6), ReconParams{});
-    const auto ctx = toggle_contexts(dt, labels);
-    const auto size = static_cast<std::uint32_t>(std::count(ctx.begin(), ctx.end(), j));
+    // The label contexts first, then the candidate ones (flag bit 5).
+    const bool by_cand = j >= kLabelContexts;
+    const int jj = by_cand ? j - kLabelContexts : j;
+    const auto ctx = toggle_contexts(dt, labels, by_cand ? &cand : nullptr);
+    const auto size = static_cast<std::uint32_t>(std::count(ctx.begin(), ctx.end(), jj));
     p = ok;
-    p.toggle_ranks[static_cast<std::size_t>(j)] = {size};
+    p.candidate_contexts = by_cand;
+    p.toggle_ranks[static_cast<std::size_t>(jj)] = {size};
     CHECK(with_recon(p) == Status::bad_layer);
     if (size == 0) continue;
-    p.toggle_ranks[static_cast<std::size_t>(j)] = {size - 1};
+    p.toggle_ranks[static_cast<std::size_t>(jj)] = {size - 1};
     CHECK(with_recon(p) == Status::ok);
   }
   {
@@ -748,6 +753,57 @@ TEST_CASE("compact RCON: toggles by context decode to the same mesh as toggles b
   const auto d_legacy = decode(b.data(), b.size()).value();
   CHECK(d_compact.levels.back().triangles == e.triangles);
   CHECK(d_legacy.levels.back().triangles == e.triangles);
+}
+
+TEST_CASE("compact RCON: toggles by candidate contexts decode to the same mesh as by label contexts") {
+  EncodeOptions o;
+  o.fidelity = Fidelity::exact;  // the torus's cocircular quads need toggles
+  const auto e = encode(samples::torus(24, 12), o).value();
+  Chunks c = chunks_of(e.bytes);
+  const std::size_t r = c.index(kRecon);
+  REQUIRE(r < c.list.size());
+  const ReconParams sent = read_payload(c.list[r].second, e.points.size());
+  REQUIRE(toggle_count(sent) > 0);
+  const auto dt = delaunay(e.points);
+  const auto scale = local_scale(e.points, dt, sent.scale_rank);
+  std::vector<std::uint8_t> cand;
+  const auto labels = rule_labels(e.points, dt, scale, sent, &cand);
+  REQUIRE_FALSE(sent.repair);
+  CHECK(cand == candidate_flags(e.points, dt, scale, sent));
+  auto toggled = labels;
+  apply_toggles(dt, sent, toggled, &cand);
+  std::vector<std::uint32_t> list;
+  for (std::size_t t = 0; t < labels.size(); ++t)
+    if (labels[t] != toggled[t]) list.push_back(static_cast<std::uint32_t>(t));
+  // The same toggles in both context sets; the candidate one uses contexts
+  // beyond the first 8 and keeps label context j within 8·c + j.
+  ReconParams by_label = sent, by_cand = sent;
+  by_label.candidate_contexts = false;
+  by_label.toggle_ranks = toggle_ranks(dt, labels, list);
+  by_cand.candidate_contexts = true;
+  by_cand.toggle_ranks = toggle_ranks(dt, labels, list, &cand);
+  std::size_t beyond = 0;
+  for (int j = kLabelContexts; j < kToggleContexts; ++j) beyond += by_cand.toggle_ranks[static_cast<std::size_t>(j)].size();
+  CHECK(beyond > 0);
+  const auto ctx = toggle_contexts(dt, labels), ctx_c = toggle_contexts(dt, labels, &cand);
+  for (std::size_t t = 0; t < ctx.size(); ++t) CHECK(ctx_c[t] % kLabelContexts == ctx[t]);
+  for (const ReconParams& p : {by_label, by_cand}) {
+    CAPTURE(p.candidate_contexts);
+    const auto bytes = write_recon(p);
+    CHECK(((bytes[0] & 32) != 0) == p.candidate_contexts);
+    CHECK(read_payload(bytes, e.points.size()).toggle_ranks == p.toggle_ranks);
+    c.list[r].second = bytes;
+    const auto b = c.bytes();
+    const auto d = decode(b.data(), b.size()).value();
+    CHECK(d.levels.back().triangles == e.triangles);
+  }
+  // Candidate contexts without the flags are an internal error, not a guess.
+  auto again = labels;
+  CHECK_THROWS_AS(apply_toggles(dt, by_cand, again), StreamError);
+  // The flag needs the compact form (bit 2): bad_layer.
+  auto bytes = write_recon(by_cand);
+  bytes[0] = static_cast<std::uint8_t>(bytes[0] & ~4);
+  CHECK(payload_status(bytes, e.points.size()) == Status::bad_layer);
 }
 
 TEST_CASE("compact RCON: a class list where one class holds nearly every point, and its errors") {

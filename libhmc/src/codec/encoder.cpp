@@ -218,7 +218,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   TuningReport tr;
   plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
   plan.rec = tr.labels.empty() ? reconstruct(plan.points, dt, kind, plan.params)
-                               : reconstruct_from_labels(dt, kind, plan.params, std::move(tr.labels));
+                               : reconstruct_from_labels(dt, kind, plan.params, std::move(tr.labels), &tr.candidates);
   plan.report.label_corrections = toggle_count(plan.params);
   plan.report.rule_mismatches = tr.mismatches_before_toggles;
 }

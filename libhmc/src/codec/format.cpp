@@ -6,6 +6,7 @@
 #include <string>
 
 #include "entropy/huffman.hpp"
+#include "entropy/rice.hpp"
 #include "util/bytes.hpp"
 #include "util/error.hpp"
 
@@ -226,16 +227,8 @@ std::vector<std::uint8_t> read_class_groups(BitReader& br, std::uint32_t classes
 void write_rice_list(BitWriter& bw, const std::vector<std::uint32_t>& list) {
   bw.exp_golomb(static_cast<std::uint32_t>(list.size()));
   if (list.empty()) return;
-  std::vector<std::uint64_t> gaps;
-  std::uint64_t next = 0;
-  for (std::uint32_t v : list) gaps.push_back(v - next), next = std::uint64_t{v} + 1;
-  int best_k = 0;
-  std::uint64_t best_bits = ~std::uint64_t{0};
-  for (int k = 0; k < 32; ++k) {
-    std::uint64_t bits = 0;
-    for (auto g : gaps) bits += (g >> k) + 1 + static_cast<std::uint64_t>(k);
-    if (bits < best_bits) best_bits = bits, best_k = k;
-  }
+  const auto gaps = index_gaps(list);
+  const int best_k = best_rice(gaps).k;
   bw.put(static_cast<std::uint32_t>(best_k), 5);
   for (auto g : gaps) {
     for (std::uint64_t q = g >> best_k; q > 0; --q) bw.put(1, 1);
@@ -267,16 +260,22 @@ std::vector<std::uint32_t> read_rice_list(BitReader& br, const std::string& what
   return list;
 }
 
-// Toggle ranks per context (spec section 10, compact form): one list each.
-std::vector<std::uint8_t> write_toggle_ranks(const std::array<std::vector<std::uint32_t>, kToggleContexts>& ranks) {
+// Toggle ranks per context (spec section 10, compact form): one list for
+// each of the first `contexts` contexts.
+std::vector<std::uint8_t> write_toggle_ranks(const std::array<std::vector<std::uint32_t>, kToggleContexts>& ranks,
+                                             int contexts) {
   BitWriter bw;
-  for (const auto& list : ranks) write_rice_list(bw, list);
+  for (int j = 0; j < kToggleContexts; ++j) {
+    if (j < contexts) write_rice_list(bw, ranks[static_cast<std::size_t>(j)]);
+    else if (!ranks[static_cast<std::size_t>(j)].empty())
+      fail(Status::internal_error, "RCON: toggle ranks in context " + std::to_string(j) + " of " + std::to_string(contexts));
+  }
   return bw.finish();
 }
 
-std::array<std::vector<std::uint32_t>, kToggleContexts> read_toggle_ranks(BitReader& br) {
+std::array<std::vector<std::uint32_t>, kToggleContexts> read_toggle_ranks(BitReader& br, int contexts) {
   std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
-  for (auto& list : ranks) list = read_rice_list(br, "toggle rank");
+  for (int j = 0; j < contexts; ++j) ranks[static_cast<std::size_t>(j)] = read_rice_list(br, "toggle rank");
   return ranks;
 }
 
@@ -338,8 +337,10 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
     auto list = write_class_list(p.vertex_class, k);
     if (list.size() < classes.size()) classes = std::move(list), class_list = true;
   }
+  if (p.candidate_contexts && !p.compact)
+    fail(Status::internal_error, "RCON: candidate contexts without the compact form");
   w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0) | (p.border_delta ? 8 : 0) |
-                                 (class_list ? 16 : 0)));
+                                 (class_list ? 16 : 0) | (p.candidate_contexts ? 32 : 0)));
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
@@ -366,7 +367,7 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   write_index_list(w, p.border);
   if (p.compact) {
     write_index_list(w, p.drops);
-    w.bytes(write_toggle_ranks(p.toggle_ranks));
+    w.bytes(write_toggle_ranks(p.toggle_ranks, toggle_context_count(p)));
   } else {
     write_index_list(w, p.toggles);
     write_index_list(w, p.drops);
@@ -378,13 +379,16 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
-  if (flags > 31) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
+  if (flags > 63) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
   p.peel = flags & 1;
   p.repair = (flags & 2) != 0;
   p.compact = (flags & 4) != 0;
   p.border_delta = (flags & 8) != 0;
   const bool class_list = (flags & 16) != 0;
   if (class_list && !p.compact) fail(Status::bad_layer, "RCON: a class list (flag bit 4) without the compact form");
+  p.candidate_contexts = (flags & 32) != 0;
+  if (p.candidate_contexts && !p.compact)
+    fail(Status::bad_layer, "RCON: candidate contexts (flag bit 5) without the compact form");
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");
@@ -423,7 +427,7 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   if (p.compact) {
     p.drops = read_index_list(r, kIndexBound, "dropped face");
     BitReader br(r.here(), r.remaining(), "RCON toggles");
-    p.toggle_ranks = read_toggle_ranks(br);
+    p.toggle_ranks = read_toggle_ranks(br, toggle_context_count(p));
     br.expect_end();
     return p;
   }

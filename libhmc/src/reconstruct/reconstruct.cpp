@@ -648,10 +648,13 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
 }
 
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                                      const std::vector<std::uint64_t>& scale, const ReconParams& p) {
+                                      const std::vector<std::uint64_t>& scale, const ReconParams& p,
+                                      std::vector<std::uint8_t>* cand_out) {
   const std::size_t nt = dt.tets.size();
   std::vector<std::uint8_t> inside(nt, 1);
-  const std::vector<std::uint8_t> cand = candidate_flags(points, dt, scale, p);
+  std::vector<std::uint8_t> own;
+  std::vector<std::uint8_t>& cand = cand_out ? *cand_out : own;
+  cand = candidate_flags(points, dt, scale, p);
 
   // Flood from outside the hull through non-candidate faces.
   std::vector<std::uint32_t> stack;
@@ -811,23 +814,26 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
   return r;
 }
 
-std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside) {
+std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                                          const std::vector<std::uint8_t>* cand) {
   std::vector<std::uint8_t> ctx(dt.tets.size());
   for (std::size_t t = 0; t < dt.tets.size(); ++t) {
-    int faces = 0;
+    int faces = 0, candidates = 0;
     for (int k = 0; k < 4; ++k) {
       const std::uint32_t u = dt.neighbors[t][k];
       faces += u == kNoTet ? inside[t] : inside[u] != inside[t];
+      if (cand) candidates += (*cand)[4 * t + static_cast<std::size_t>(k)];
     }
-    ctx[t] = static_cast<std::uint8_t>(4 * inside[t] + std::min(faces, 3));
+    ctx[t] = static_cast<std::uint8_t>(kLabelContexts * candidates + 4 * inside[t] + std::min(faces, 3));
   }
   return ctx;
 }
 
 std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetrahedralization& dt,
                                                                      const std::vector<std::uint8_t>& inside,
-                                                                     const std::vector<std::uint32_t>& toggled) {
-  const auto ctx = toggle_contexts(dt, inside);
+                                                                     const std::vector<std::uint32_t>& toggled,
+                                                                     const std::vector<std::uint8_t>* cand) {
+  const auto ctx = toggle_contexts(dt, inside, cand);
   std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
   std::array<std::uint32_t, kToggleContexts> seen{};
   std::size_t next = 0;
@@ -847,7 +853,8 @@ std::size_t toggle_count(const ReconParams& p) {
   return n;
 }
 
-void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vector<std::uint8_t>& inside) {
+void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vector<std::uint8_t>& inside,
+                   const std::vector<std::uint8_t>* cand) {
   for (std::uint32_t t : p.toggles) {
     if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
   }
@@ -855,7 +862,9 @@ void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vect
   // Contexts cost a pass over the tetrahedra: only when some rank is listed.
   if (p.compact && std::any_of(p.toggle_ranks.begin(), p.toggle_ranks.end(), [](const auto& r) { return !r.empty(); })) {
     // All ranks refer to the labels before any toggle.
-    const auto ctx = toggle_contexts(dt, inside);
+    if (p.candidate_contexts && (!cand || cand->size() != 4 * inside.size()))
+      fail(Status::internal_error, "apply_toggles: candidate contexts need the candidate flags");
+    const auto ctx = toggle_contexts(dt, inside, p.candidate_contexts ? cand : nullptr);
     std::array<std::uint32_t, kToggleContexts> seen{};
     std::array<std::size_t, kToggleContexts> next{};
     for (std::size_t t = 0; t < ctx.size(); ++t) {
@@ -908,17 +917,18 @@ Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedr
   if (kind == Kind::points) return {};
   if (p.border_delta) fail(Status::internal_error, "reconstruct: the border list is not resolved");
   const auto scale = local_scale(points, dt, p.scale_rank);
-  auto inside = rule_labels(points, dt, scale, p);
+  std::vector<std::uint8_t> cand;
+  auto inside = rule_labels(points, dt, scale, p, &cand);
   if (p.repair) repair_labels(dt, kind, inside);
-  return reconstruct_from_labels(dt, kind, p, std::move(inside));
+  return reconstruct_from_labels(dt, kind, p, std::move(inside), &cand);
 }
 
 Reconstruction reconstruct_from_labels(const Tetrahedralization& dt, Kind kind, const ReconParams& p,
-                                       std::vector<std::uint8_t> inside) {
+                                       std::vector<std::uint8_t> inside, const std::vector<std::uint8_t>* cand) {
   if (kind == Kind::points) return {};
   if (p.border_delta) fail(Status::internal_error, "reconstruct: the border list is not resolved");
   if (inside.size() != dt.tets.size()) fail(Status::internal_error, "reconstruct: one label per tetrahedron needed");
-  apply_toggles(dt, p, inside);
+  apply_toggles(dt, p, inside, cand);
   if (!p.drops.empty() && p.drops.back() / 4 >= inside.size())
     fail(Status::bad_layer, "RCON: dropped face " + std::to_string(p.drops.back()) + " does not exist");
   return extract(dt, kind, inside, p);

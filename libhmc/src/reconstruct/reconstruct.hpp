@@ -16,8 +16,11 @@
 namespace hmc::detail {
 
 /// Contexts of the compact toggle list (spec 11.5): a tetrahedron's label
-/// before toggles and how many of its faces lie on the interface (0-3+).
-constexpr int kToggleContexts = 8;
+/// before toggles and how many of its faces lie on the interface (0-3+),
+/// 8 contexts; with candidate contexts (RCON flag bit 5, spec 0.20) also
+/// how many of its faces are candidates (0-4), 40.
+constexpr int kToggleContexts = 40;
+constexpr int kLabelContexts = 8;
 
 /// Side information that drives the rule (the RCON chunk's content).
 struct ReconParams {
@@ -52,6 +55,10 @@ struct ReconParams {
   /// and toggles as ranks within their context. Without it (streams up to
   /// spec 0.4), toggles are tetrahedron indices.
   bool compact = true;
+  /// RCON flag bit 5 (spec 0.20, with compact): toggle contexts also count
+  /// the tetrahedron's candidate faces (kToggleContexts instead of
+  /// kLabelContexts).
+  bool candidate_contexts = false;
   /// Tetrahedra whose label is inverted after the rule (sorted, distinct);
   /// only when !compact.
   std::vector<std::uint32_t> toggles;
@@ -81,9 +88,11 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
                                           const std::vector<std::uint64_t>& scale, const ReconParams& p);
 
 /// The labels of the rule before toggles (flood from the hull through
-/// non-candidate faces, then peeling).
+/// non-candidate faces, then peeling); `cand`, when given, receives the
+/// candidate flags (candidate_flags()).
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                                      const std::vector<std::uint64_t>& scale, const ReconParams& p);
+                                      const std::vector<std::uint64_t>& scale, const ReconParams& p,
+                                      std::vector<std::uint8_t>* cand = nullptr);
 
 /// The normative repair step (spec 11.4a) on rule labels: greedy local
 /// flips around unsound vertices (surface kind: points off the surface;
@@ -109,23 +118,34 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                   const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work, bool* on = nullptr);
 
+/// Number of toggle contexts of `p`: kToggleContexts with candidate
+/// contexts, else kLabelContexts.
+inline int toggle_context_count(const ReconParams& p) {
+  return p.candidate_contexts ? kToggleContexts : kLabelContexts;
+}
+
 /// Context of every tetrahedron for the compact toggle list (spec 11.5),
 /// from the labels before toggles: 4 · label + min(3, faces on the
-/// interface), a hull face counting for an inside tetrahedron.
-std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside);
+/// interface), a hull face counting for an inside tetrahedron; plus 8 ·
+/// (its candidate faces) when `cand` (candidate_flags()) is given.
+std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                                          const std::vector<std::uint8_t>* cand = nullptr);
 
 /// The toggled tetrahedra `toggled` (ascending) as ranks within their
 /// contexts under the labels before toggles (encoder side of the above).
 std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetrahedralization& dt,
                                                                      const std::vector<std::uint8_t>& inside,
-                                                                     const std::vector<std::uint32_t>& toggled);
+                                                                     const std::vector<std::uint32_t>& toggled,
+                                                                     const std::vector<std::uint8_t>* cand = nullptr);
 
 /// Number of toggles `p` carries, in either form.
 std::size_t toggle_count(const ReconParams& p);
 
 /// Invert the labels `p` toggles (spec 11.5); bad_layer for an index or a
-/// rank that names no tetrahedron.
-void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vector<std::uint8_t>& inside);
+/// rank that names no tetrahedron. `cand`: the candidate flags, needed when
+/// p.candidate_contexts (internal_error without them).
+void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vector<std::uint8_t>& inside,
+                   const std::vector<std::uint8_t>* cand = nullptr);
 
 /// Surface or volume from final labels (toggles applied by the caller);
 /// of `p` only the border and drop lists are used.
@@ -153,9 +173,10 @@ Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedr
 
 /// The end of reconstruct(): toggles (11.5), drops and extraction (11.6),
 /// on the labels of the rule after peeling and, when p.repair, the repair
-/// (a caller that has them, as the encoder's tuning does, skips the rest).
+/// (a caller that has them, as the encoder's tuning does, skips the rest);
+/// `cand` as for apply_toggles().
 Reconstruction reconstruct_from_labels(const Tetrahedralization& dt, Kind kind, const ReconParams& p,
-                                       std::vector<std::uint8_t> inside);
+                                       std::vector<std::uint8_t> inside, const std::vector<std::uint8_t>* cand = nullptr);
 
 /// Exact squared distance of two grid points (below 3·2^42).
 inline std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {

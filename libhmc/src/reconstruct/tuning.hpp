@@ -62,6 +62,9 @@ struct TuningReport {
   /// they set it), before toggles, for reconstruct_from_labels(); empty
   /// when tuning had nothing to tune.
   std::vector<std::uint8_t> labels;
+  /// The candidate flags (candidate_flags()) when the chosen parameters
+  /// set candidate_contexts, for reconstruct_from_labels(); else empty.
+  std::vector<std::uint8_t> candidates;
 };
 
 /// What the encoder knows about the input, on the level's points.
