@@ -30,6 +30,32 @@ std::uint64_t list_bits(std::uint64_t count, std::uint64_t range) {
   return static_cast<std::uint64_t>(static_cast<double>(count) * (std::log2(gap + 1) + 2.0)) + 8;
 }
 
+// The toggle lists of `toggled` (ascending) under the labels `inside`: in
+// the label contexts or, where shorter, the candidate contexts (spec 11.5;
+// 40 empty lists cost 32 bits more than 8).
+struct ToggleCoding {
+  std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
+  bool by_candidates = false;
+  std::uint64_t bits = 0;
+};
+
+ToggleCoding code_toggles(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
+                          const std::vector<std::uint32_t>& toggled, const std::vector<std::uint8_t>& cand) {
+  auto bits = [](const std::array<std::vector<std::uint32_t>, kToggleContexts>& r, int contexts) {
+    std::uint64_t b = 0;
+    for (int j = 0; j < contexts; ++j) b += rice_list_bits(r[static_cast<std::size_t>(j)]);
+    return b;
+  };
+  ToggleCoding out;
+  out.ranks = toggle_ranks(dt, inside, toggled);
+  out.bits = bits(out.ranks, kLabelContexts);
+  if (toggled.empty()) return out;
+  auto by_candidates = toggle_ranks(dt, inside, toggled, &cand);
+  const std::uint64_t b = bits(by_candidates, kToggleContexts);
+  if (b < out.bits) out = {std::move(by_candidates), true, b};
+  return out;
+}
+
 double bbox_diagonal(const std::vector<GridPoint>& points) {
   double s = 0;
   for (int a = 0; a < 3; ++a) {
@@ -425,19 +451,24 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // what the repair cannot mend.
   // labels: the rule's (after the repair, when p sets it), kept for the
   // parameters tuning chooses.
+  // Returns that count and the bits it costs: the toggle lists of the
+  // mismatches (shape fidelity leaves some, so a bound), or an estimate of
+  // them for what the repair cannot mend.
   auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale, std::vector<std::uint8_t>& labels) {
-    labels = rule_labels(points, dt, scale, p);
-    std::uint64_t m = 0;
+    std::vector<std::uint8_t> cand;
+    labels = rule_labels(points, dt, scale, p, &cand);
     if (p.repair) {
       repair_labels(dt, kind, labels);
-      m += approximation_penalty(dt, labels, want_all, in);
-    } else {
-      for (std::size_t t = 0; t < nt; ++t) m += labels[t] != truth[t];
+      const std::uint64_t m = approximation_penalty(dt, labels, want_all, in);
+      return std::pair<std::uint64_t, std::uint64_t>{m, list_bits(m, nt)};
     }
-    return m;
+    std::vector<std::uint32_t> wrong;
+    for (std::size_t t = 0; t < nt; ++t)
+      if (labels[t] != truth[t]) wrong.push_back(static_cast<std::uint32_t>(t));
+    return std::pair<std::uint64_t, std::uint64_t>{wrong.size(), code_toggles(dt, labels, wrong, cand).bits};
   };
   std::uint64_t best_bits = ~std::uint64_t{0};
-  std::uint64_t best_mismatch = 0;
+  std::uint64_t best_mismatch = 0, best_correction_bits = 0;
   std::vector<std::uint8_t> trial, best_labels;
   // A surface vertex has about six surface neighbours; a volume's boundary
   // vertex more Delaunay edges inside the solid.
@@ -486,11 +517,12 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       // beat the best, skip the work (the same choice, sooner; volumes'
       // coarser levels often reach it with the first trial).
       if (class_bits + list_bits(0, nt) >= best_bits) return false;
-      const std::uint64_t mism = cost(p, scale, trial);
-      const std::uint64_t bits = class_bits + list_bits(mism, nt);
+      const auto [mism, correction_bits] = cost(p, scale, trial);
+      const std::uint64_t bits = class_bits + correction_bits;
       if (bits >= best_bits) return false;
       best_bits = bits;
       best_mismatch = mism;
+      best_correction_bits = correction_bits;
       best = p;
       best_labels.swap(trial);
       return true;
@@ -554,7 +586,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // rule gets wrong (or, on coarser levels, the repairs it needs).
   {
     const auto& scale = best_scale;
-    std::uint64_t current = best_mismatch;  // cost(best, scale), known from the search
+    std::uint64_t current = best_mismatch, current_bits = best_correction_bits;  // cost(best, scale), known
     const std::pair<int, std::uint32_t> tries[] = {{kCircleRadius, 512}, {kEdgeRatio, 16},       {kDensity, 1024},
                                                    {kLone, 1},           {kNeighbourRadius, 4096}, {kNeighbourRatio, 32}};
     for (const auto& [id, threshold] : tries) {
@@ -562,9 +594,10 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       if (current == 0) break;    // nothing left for a filter to mend
       ReconParams p = best;
       p.filters[static_cast<std::size_t>(id)] = threshold;
-      const std::uint64_t c = cost(p, scale, trial);
-      if (c < current) {
+      const auto [c, c_bits] = cost(p, scale, trial);
+      if (c_bits < current_bits) {
         current = c;
+        current_bits = c_bits;
         best = p;
         best_labels.swap(trial);
       }
@@ -641,26 +674,15 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     std::vector<std::uint32_t> list;
     for (std::size_t t = 0; t < nt; ++t)
       if (toggled[t]) list.push_back(static_cast<std::uint32_t>(t));
-    best.toggle_ranks = toggle_ranks(dt, rule, list);
     // Spec 11.5, candidate contexts: where the rule errs also depends on how
     // many of a tetrahedron's faces are candidates (on the 1-level streams of
     // the shared models, the toggles of the skull, horse and bunny cost 29 to
-    // 42 % less). 40 lists cost 32 bits more than 8 when empty: take the
-    // shorter.
-    if (!list.empty()) {
-      auto cand = candidate_flags(points, dt, best_scale, best);
-      auto by_candidates = toggle_ranks(dt, rule, list, &cand);
-      auto bits = [](const std::array<std::vector<std::uint32_t>, kToggleContexts>& r, int contexts) {
-        std::uint64_t b = 0;
-        for (int j = 0; j < contexts; ++j) b += rice_list_bits(r[static_cast<std::size_t>(j)]);
-        return b;
-      };
-      if (bits(by_candidates, kToggleContexts) < bits(best.toggle_ranks, kLabelContexts)) {
-        best.toggle_ranks = std::move(by_candidates);
-        best.candidate_contexts = true;
-        if (report) report->candidates = std::move(cand);
-      }
-    }
+    // 42 % less).
+    auto cand = candidate_flags(points, dt, best_scale, best);
+    auto coding = code_toggles(dt, rule, list, cand);
+    best.toggle_ranks = std::move(coding.ranks);
+    best.candidate_contexts = coding.by_candidates;
+    if (coding.by_candidates && report) report->candidates = std::move(cand);
   }
   // Hole caps are judged against the input only where the level follows it;
   // coarser levels keep the border rule alone.
