@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x14"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x15"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -631,13 +631,14 @@ def rice_bits(bw, ranks, k=None):
 
 def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, border=(), toggles=(),
                  drops=(), class_code_bits=None, filters=None, mask=None, compact=False, group=1, toggle_bits=None,
-                 common=None, candidate_contexts=False):
+                 common=None, candidate_contexts=False, vertex_contexts=False):
     """§10. classes: the class of each of the n points (needed when K > 1);
     filters: {filter number: threshold}. compact: flag bit 2, classes in
     groups of `group` points (10.1) and `toggles` as {context: ranks} (10.2),
     or the toggle bit stream as given in `toggle_bits`. common: flag bit 4,
     the classes as a list of the points outside class `common` (10.1).
-    candidate_contexts: flag bit 5, 40 toggle contexts (11.5)."""
+    candidate_contexts: flag bit 5, 40 toggle contexts (11.5);
+    vertex_contexts: flag bit 6, 80 (with candidate_contexts)."""
     filters = filters or {}
     if mask is None:
         mask = sum(1 << i for i in filters)
@@ -647,6 +648,8 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
         flags |= 16
     if candidate_contexts:
         flags |= 32
+    if vertex_contexts:
+        flags |= 64
     out = bytes([flags, scale_rank, mask]) + b"".join(varint(filters[i]) for i in sorted(filters))
     out += varint(len(multipliers)) + b"".join(varint(m) for m in multipliers)
     if len(multipliers) > 1:
@@ -697,7 +700,7 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
     if toggle_bits is None:
         bw = BitWriter()
         toggles = toggles or {}
-        for j in range(40 if candidate_contexts else 8):
+        for j in range(80 if vertex_contexts else 40 if candidate_contexts else 8):
             rice_bits(bw, sorted(toggles.get(j, ())))
         toggle_bits = bw.bytes()
     return out + gaps(border) + gaps(drops) + toggle_bits
@@ -1243,6 +1246,23 @@ def hb_rcon_candidate_contexts():
     return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
 
 
+def hb_rcon_vertex_contexts():
+    # Flag bits 5 and 6: 80 toggle contexts. Each listed context holds 4
+    # tetrahedra at least on its level (44, 52, 60, 61 and 74-78 on the
+    # first; 36, 37, 40, 48, 49, 56-58, 72-74 and 76-79 on the second); the
+    # second level's classes travel as a list.
+    q = 6
+    pts = sphere_pts(180, q, 46)
+    lv = nested(pts, [70, 180], 47)
+    n0, n1 = len(lv[0]), len(lv[1])
+    rc0 = rcon_payload(n0, flags=1, multipliers=(900,), compact=True, candidate_contexts=True, vertex_contexts=True,
+                       toggles={44: (0,), 60: (1, 3), 78: (2,)})
+    rc1 = rcon_payload(n1, flags=1, multipliers=(700, 1800), compact=True, candidate_contexts=True, vertex_contexts=True,
+                       common=0, classes=[1 if i % 9 == 0 else 0 for i in range(n1)],
+                       toggles={37: (0,), 48: (3,), 57: (1, 2), 79: (0,)})
+    return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
+
+
 def hb_rcon_compact_volume():
     q = 5
     pts = rand_pts(120, q, 34)
@@ -1618,6 +1638,8 @@ HANDBUILT = [
      "hand-written compact RCON with class lists (flag bit 4): K = 3 around common class 1, K = 2 with no point listed, K = 64 around common class 40", sec("rcon", "recon")),
     ("rcon-candidate-contexts", hb_rcon_candidate_contexts, F,
      "hand-written compact RCON with candidate contexts (flag bit 5): toggle ranks in contexts 0-39 of two levels of a sphere", sec("rcon", "recon")),
+    ("rcon-vertex-contexts", hb_rcon_vertex_contexts, F,
+     "hand-written compact RCON with vertex contexts (flag bits 5 and 6): toggle ranks in contexts 37-79 of two levels of a sphere, one with a class list", sec("rcon", "recon")),
     ("rcon-compact-volume", hb_rcon_compact_volume, F,
      "hand-written compact RCON for a volume: repair then toggles by context, K = 64 in groups of 2 (4096 symbols)", sec("rcon", "recon")),
     ("rcon-handbuilt-volume", hb_rcon_volume, F,
@@ -1902,8 +1924,10 @@ NEGATIVE = [
     ("neg-refn-count", "bad_layer", P, "a REFN adding two points where one is declared", ["8A.1", "13"],
      lambda: stream_q1_refn(refn_single(8))),
     # RCON
-    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x40 (a reserved bit)", ["10", "13"],
-     lambda: surface_one_level(rcon_payload(30, flags=64))),
+    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x80 (a reserved bit)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, flags=128))),
+    ("neg-rcon-vertex-loose", "bad_layer", P, "RCON flag bit 6 (vertex_contexts) without candidate_contexts", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True, flags=64 | 1))),
     ("neg-rcon-candidate-loose", "bad_layer", P, "RCON flag bit 5 (candidate_contexts) without compact", ["10", "13"],
      lambda: surface_one_level(rcon_payload(30, flags=32))),
     ("neg-rcon-class-list-loose", "bad_layer", P, "RCON flag bit 4 (class_list) without compact", ["10", "13"],
@@ -1979,6 +2003,7 @@ NEGATIVE = [
     ("neg-rcon-toggle-range", "bad_layer", F, "a toggle index equal to the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
     ("neg-rcon-toggle-rank-range", "bad_layer", F, "a compact toggle rank equal to the number of tetrahedra of its context (full profile only)", ["10.2", "11.5", "13"], None),
     ("neg-rcon-candidate-rank-range", "bad_layer", F, "candidate contexts: a toggle rank of context 17 equal to the number of tetrahedra (full profile only)", ["10.2", "11.5", "13"], None),
+    ("neg-rcon-vertex-rank-range", "bad_layer", F, "vertex contexts: a toggle rank of context 57 equal to the number of tetrahedra (full profile only)", ["10.2", "11.5", "13"], None),
     ("neg-rcon-drop-range", "bad_layer", F, "a drop index equal to four times the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
 ]
 
@@ -2053,6 +2078,8 @@ def toggle_range_stream(drops=False, rank=False, candidates=False):
     pts = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
     if drops:
         rc = rcon_payload(8, drops=(24,))
+    elif candidates == "vertices":
+        rc = rcon_payload(8, compact=True, candidate_contexts=True, vertex_contexts=True, toggles={57: (6,)})
     elif candidates:
         rc = rcon_payload(8, compact=True, candidate_contexts=True, toggles={17: (6,)})
     elif rank:
@@ -2148,6 +2175,9 @@ def build(hmc, out):
             meta["built_by"] = "generate.py toggle_range_stream"
         elif name == "neg-rcon-candidate-rank-range":
             data = toggle_range_stream(candidates=True)
+            meta["built_by"] = "generate.py toggle_range_stream"
+        elif name == "neg-rcon-vertex-rank-range":
+            data = toggle_range_stream(candidates="vertices")
             meta["built_by"] = "generate.py toggle_range_stream"
         elif name == "neg-rcon-drop-range":
             data = toggle_range_stream(drops=True)

@@ -740,7 +740,7 @@ def rice_list(br, what):
 def parse_rcon(payload, n, form=1):
     r = ByteReader(payload, "bad_layer", "RCON")
     flags = r.u8()
-    if flags & 0xC0:  # bit 3 (inherit_border) changes only what the border list means
+    if flags & 0x80:  # bit 3 (inherit_border) changes only what the border list means
         r.fail("reserved flag bits set (flags = %d)" % flags)
     compact = flags >> 2 & 1
     class_list = flags >> 4 & 1
@@ -749,6 +749,9 @@ def parse_rcon(payload, n, form=1):
     candidate_contexts = flags >> 5 & 1  # §11.5: 40 toggle contexts instead of 8
     if candidate_contexts and not compact:
         r.fail("candidate_contexts (flag bit 5) without compact")
+    vertex_contexts = flags >> 6 & 1  # §11.5: 80 toggle contexts
+    if vertex_contexts and not candidate_contexts:
+        r.fail("vertex_contexts (flag bit 6) without candidate_contexts")
     k = r.u8()
     if not 1 <= k <= 64:
         r.fail("scale_rank %d out of range" % k)
@@ -830,7 +833,7 @@ def parse_rcon(payload, n, form=1):
         return out
 
     border = index_list("border", n)
-    toggles = [0] * (40 if candidate_contexts else 8)
+    toggles = [0] * (80 if vertex_contexts else 40 if candidate_contexts else 8)
     if not compact:
         toggles = len(index_list("toggle", None))  # checked against the tetrahedra only when reconstructing
         drops = index_list("drop", None)
@@ -843,7 +846,7 @@ def parse_rcon(payload, n, form=1):
         for j in range(len(toggles)):
             toggles[j] = len(rice_list(br, "toggle rank of context %d" % j))
         br.finish()
-    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list, "candidate_contexts": candidate_contexts, "scale_rank": k, "filters": thresholds,
+    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list, "candidate_contexts": candidate_contexts, "vertex_contexts": vertex_contexts, "scale_rank": k, "filters": thresholds,
             "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
             "drops": len(drops)}
 

@@ -44,7 +44,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   again.length = static_cast<std::uint32_t>(bytes.size());
   const auto back = hmc::detail::read_recon(again, points.size());
   FUZZ_CHECK(back.multipliers == rp.multipliers && back.vertex_class == rp.vertex_class && back.compact == rp.compact &&
-                 back.candidate_contexts == rp.candidate_contexts && back.toggles == rp.toggles &&
+                 back.candidate_contexts == rp.candidate_contexts && back.vertex_contexts == rp.vertex_contexts &&
+                 back.toggles == rp.toggles &&
                  back.toggle_ranks == rp.toggle_ranks && back.drops == rp.drops && back.border == rp.border &&
                  back.filters == rp.filters && back.peel == rp.peel && back.repair == rp.repair &&
                  back.scale_rank == rp.scale_rank && back.border_delta == rp.border_delta,

@@ -353,6 +353,16 @@ for j in range(40):
 rc = bytes([1 | 4 | 32, 6, 0, 1]) + varint(900) + bytes([0, 0]) + b.bytes()
 put("recon", "candidate-contexts", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
 
+# Vertex contexts (flag bits 5 and 6): 80 lists, rank 0 in context 60.
+b = Bits()
+for j in range(80):
+    if j == 60:
+        b.ue(1); b.put(0, 5); b.put(0, 1)  # Rice parameter 0: gap 0 is 0
+    else:
+        b.ue(0)
+rc = bytes([1 | 4 | 32 | 64, 6, 0, 1]) + varint(900) + bytes([0, 0]) + b.bytes()
+put("recon", "vertex-contexts", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
+
 # --- roundtrip: q - 1, flags, seed, then 12 bytes per point --------------
 def rt(q, flags, seed, coords, fmt):
     return bytes([q - 1, flags, seed]) + b"".join(struct.pack("<3" + fmt, *c) for c in coords)

@@ -342,16 +342,18 @@ TEST_CASE("RCON syntax errors are bad_layer, misplaced RCON is bad_chunk") {
   const auto dt = delaunay(e.points);
   std::vector<std::uint8_t> cand;
   const auto labels = rule_labels(e.points, dt, local_scale(e.points, dt, 6), ReconParams{}, &cand);
-  for (int j = 0; j < kLabelContexts + kToggleContexts; ++j) {
+  for (int j = 0; j < kLabelContexts + kCandidateContexts + kToggleContexts; ++j) {
     CAPTURE(j);
     // One past the last tetrahedron of each context: count the context.
-    // The label contexts first, then the candidate ones (flag bit 5).
-    const bool by_cand = j >= kLabelContexts;
-    const int jj = by_cand ? j - kLabelContexts : j;
-    const auto ctx = toggle_contexts(dt, labels, by_cand ? &cand : nullptr);
+    // The label contexts first, then the candidate ones (flag bit 5), then
+    // those with the vertex contexts too (flag bit 6).
+    const bool by_cand = j >= kLabelContexts, by_vertices = j >= kLabelContexts + kCandidateContexts;
+    const int jj = by_vertices ? j - kLabelContexts - kCandidateContexts : by_cand ? j - kLabelContexts : j;
+    const auto ctx = toggle_contexts(dt, labels, by_cand ? &cand : nullptr, by_vertices);
     const auto size = static_cast<std::uint32_t>(std::count(ctx.begin(), ctx.end(), jj));
     p = ok;
     p.candidate_contexts = by_cand;
+    p.vertex_contexts = by_vertices;
     p.toggle_ranks[static_cast<std::size_t>(jj)] = {size};
     CHECK(with_recon(p) == Status::bad_layer);
     if (size == 0) continue;
@@ -777,20 +779,33 @@ TEST_CASE("compact RCON: toggles by candidate contexts decode to the same mesh a
     if (labels[t] != toggled[t]) list.push_back(static_cast<std::uint32_t>(t));
   // The same toggles in both context sets; the candidate one uses contexts
   // beyond the first 8 and keeps label context j within 8·c + j.
-  ReconParams by_label = sent, by_cand = sent;
-  by_label.candidate_contexts = false;
+  ReconParams by_label = sent, by_cand = sent, by_vertices = sent;
+  by_label.candidate_contexts = by_label.vertex_contexts = false;
   by_label.toggle_ranks = toggle_ranks(dt, labels, list);
   by_cand.candidate_contexts = true;
+  by_cand.vertex_contexts = false;
   by_cand.toggle_ranks = toggle_ranks(dt, labels, list, &cand);
+  by_vertices.candidate_contexts = by_vertices.vertex_contexts = true;
+  by_vertices.toggle_ranks = toggle_ranks(dt, labels, list, &cand, true);
+  std::size_t with_all_on = 0;
+  for (int j = kCandidateContexts; j < kToggleContexts; ++j)
+    with_all_on += by_vertices.toggle_ranks[static_cast<std::size_t>(j)].size();
+  CHECK(with_all_on > 0);
   std::size_t beyond = 0;
-  for (int j = kLabelContexts; j < kToggleContexts; ++j) beyond += by_cand.toggle_ranks[static_cast<std::size_t>(j)].size();
+  for (int j = kLabelContexts; j < kCandidateContexts; ++j) beyond += by_cand.toggle_ranks[static_cast<std::size_t>(j)].size();
   CHECK(beyond > 0);
-  const auto ctx = toggle_contexts(dt, labels), ctx_c = toggle_contexts(dt, labels, &cand);
-  for (std::size_t t = 0; t < ctx.size(); ++t) CHECK(ctx_c[t] % kLabelContexts == ctx[t]);
-  for (const ReconParams& p : {by_label, by_cand}) {
+  const auto ctx = toggle_contexts(dt, labels), ctx_c = toggle_contexts(dt, labels, &cand),
+             ctx_v = toggle_contexts(dt, labels, &cand, true);
+  for (std::size_t t = 0; t < ctx.size(); ++t) {
+    CHECK(ctx_c[t] % kLabelContexts == ctx[t]);
+    CHECK(ctx_v[t] % kCandidateContexts == ctx_c[t]);
+  }
+  for (const ReconParams& p : {by_label, by_cand, by_vertices}) {
     CAPTURE(p.candidate_contexts);
+    CAPTURE(p.vertex_contexts);
     const auto bytes = write_recon(p);
     CHECK(((bytes[0] & 32) != 0) == p.candidate_contexts);
+    CHECK(((bytes[0] & 64) != 0) == p.vertex_contexts);
     CHECK(read_payload(bytes, e.points.size()).toggle_ranks == p.toggle_ranks);
     c.list[r].second = bytes;
     const auto b = c.bytes();
@@ -800,9 +815,12 @@ TEST_CASE("compact RCON: toggles by candidate contexts decode to the same mesh a
   // Candidate contexts without the flags are an internal error, not a guess.
   auto again = labels;
   CHECK_THROWS_AS(apply_toggles(dt, by_cand, again), StreamError);
-  // The flag needs the compact form (bit 2): bad_layer.
+  // The flag needs the compact form (bit 2), and bit 6 needs bit 5: bad_layer.
   auto bytes = write_recon(by_cand);
   bytes[0] = static_cast<std::uint8_t>(bytes[0] & ~4);
+  CHECK(payload_status(bytes, e.points.size()) == Status::bad_layer);
+  bytes = write_recon(by_vertices);
+  bytes[0] = static_cast<std::uint8_t>(bytes[0] & ~32);
   CHECK(payload_status(bytes, e.points.size()) == Status::bad_layer);
 }
 

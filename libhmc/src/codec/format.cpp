@@ -337,10 +337,11 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
     auto list = write_class_list(p.vertex_class, k);
     if (list.size() < classes.size()) classes = std::move(list), class_list = true;
   }
-  if (p.candidate_contexts && !p.compact)
-    fail(Status::internal_error, "RCON: candidate contexts without the compact form");
+  if ((p.candidate_contexts && !p.compact) || (p.vertex_contexts && !p.candidate_contexts))
+    fail(Status::internal_error, "RCON: toggle contexts without the flags they need");
   w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0) | (p.border_delta ? 8 : 0) |
-                                 (class_list ? 16 : 0) | (p.candidate_contexts ? 32 : 0)));
+                                 (class_list ? 16 : 0) | (p.candidate_contexts ? 32 : 0) |
+                                 (p.vertex_contexts ? 64 : 0)));
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
@@ -379,7 +380,7 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
-  if (flags > 63) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
+  if (flags > 127) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
   p.peel = flags & 1;
   p.repair = (flags & 2) != 0;
   p.compact = (flags & 4) != 0;
@@ -389,6 +390,9 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   p.candidate_contexts = (flags & 32) != 0;
   if (p.candidate_contexts && !p.compact)
     fail(Status::bad_layer, "RCON: candidate contexts (flag bit 5) without the compact form");
+  p.vertex_contexts = (flags & 64) != 0;
+  if (p.vertex_contexts && !p.candidate_contexts)
+    fail(Status::bad_layer, "RCON: vertex contexts (flag bit 6) without candidate contexts (bit 5)");
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");

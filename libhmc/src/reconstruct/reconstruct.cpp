@@ -815,16 +815,36 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
 }
 
 std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
-                                          const std::vector<std::uint8_t>* cand) {
-  std::vector<std::uint8_t> ctx(dt.tets.size());
-  for (std::size_t t = 0; t < dt.tets.size(); ++t) {
-    int faces = 0, candidates = 0;
+                                          const std::vector<std::uint8_t>* cand, bool vertices) {
+  const std::size_t nt = dt.tets.size();
+  // Is face k of t on the interface (shared with a tetrahedron of the other
+  // label, or a hull face of an inside one)?
+  auto on_interface = [&](std::size_t t, int k) {
+    const std::uint32_t u = dt.neighbors[t][k];
+    return u == kNoTet ? inside[t] != 0 : inside[u] != inside[t];
+  };
+  // Points on the interface (spec 11.4a), when the contexts need them.
+  std::vector<std::uint8_t> on;
+  if (vertices) {
+    std::uint32_t top = 0;
+    for (const auto& tet : dt.tets)
+      for (auto v : tet) top = std::max(top, v + 1);
+    on.assign(top, 0);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k)
+        if (on_interface(t, k))
+          for (int j = 0; j < 3; ++j) on[dt.tets[t][kFaceVertices[k][j]]] = 1;
+  }
+  std::vector<std::uint8_t> ctx(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    int faces = 0, candidates = 0, points_on = 0;
     for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      faces += u == kNoTet ? inside[t] : inside[u] != inside[t];
+      faces += on_interface(t, k);
       if (cand) candidates += (*cand)[4 * t + static_cast<std::size_t>(k)];
+      if (vertices) points_on += on[dt.tets[t][k]];
     }
-    ctx[t] = static_cast<std::uint8_t>(kLabelContexts * candidates + 4 * inside[t] + std::min(faces, 3));
+    ctx[t] = static_cast<std::uint8_t>((points_on == 4 ? kCandidateContexts : 0) + kLabelContexts * candidates +
+                                       4 * inside[t] + std::min(faces, 3));
   }
   return ctx;
 }
@@ -832,8 +852,9 @@ std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const st
 std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetrahedralization& dt,
                                                                      const std::vector<std::uint8_t>& inside,
                                                                      const std::vector<std::uint32_t>& toggled,
-                                                                     const std::vector<std::uint8_t>* cand) {
-  const auto ctx = toggle_contexts(dt, inside, cand);
+                                                                     const std::vector<std::uint8_t>* cand,
+                                                                     bool vertices) {
+  const auto ctx = toggle_contexts(dt, inside, cand, vertices);
   std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
   std::array<std::uint32_t, kToggleContexts> seen{};
   std::size_t next = 0;
@@ -864,7 +885,7 @@ void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vect
     // All ranks refer to the labels before any toggle.
     if (p.candidate_contexts && (!cand || cand->size() != 4 * inside.size()))
       fail(Status::internal_error, "apply_toggles: candidate contexts need the candidate flags");
-    const auto ctx = toggle_contexts(dt, inside, p.candidate_contexts ? cand : nullptr);
+    const auto ctx = toggle_contexts(dt, inside, p.candidate_contexts ? cand : nullptr, p.vertex_contexts);
     std::array<std::uint32_t, kToggleContexts> seen{};
     std::array<std::size_t, kToggleContexts> next{};
     for (std::size_t t = 0; t < ctx.size(); ++t) {

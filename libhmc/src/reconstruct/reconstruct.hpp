@@ -18,8 +18,11 @@ namespace hmc::detail {
 /// Contexts of the compact toggle list (spec 11.5): a tetrahedron's label
 /// before toggles and how many of its faces lie on the interface (0-3+),
 /// 8 contexts; with candidate contexts (RCON flag bit 5, spec 0.20) also
-/// how many of its faces are candidates (0-4), 40.
-constexpr int kToggleContexts = 40;
+/// how many of its faces are candidates (0-4), 40; with vertex contexts
+/// (flag bit 6, spec 0.21) also whether its four vertices are all on the
+/// interface, 80.
+constexpr int kToggleContexts = 80;
+constexpr int kCandidateContexts = 40;
 constexpr int kLabelContexts = 8;
 
 /// Side information that drives the rule (the RCON chunk's content).
@@ -59,6 +62,9 @@ struct ReconParams {
   /// the tetrahedron's candidate faces (kToggleContexts instead of
   /// kLabelContexts).
   bool candidate_contexts = false;
+  /// RCON flag bit 6 (spec 0.21, with candidate_contexts): toggle contexts
+  /// also tell whether all four vertices are on the interface.
+  bool vertex_contexts = false;
   /// Tetrahedra whose label is inverted after the rule (sorted, distinct);
   /// only when !compact.
   std::vector<std::uint32_t> toggles;
@@ -118,25 +124,27 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                   const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work, bool* on = nullptr);
 
-/// Number of toggle contexts of `p`: kToggleContexts with candidate
-/// contexts, else kLabelContexts.
+/// Number of toggle contexts of `p`: kToggleContexts with vertex contexts,
+/// kCandidateContexts with candidate contexts alone, else kLabelContexts.
 inline int toggle_context_count(const ReconParams& p) {
-  return p.candidate_contexts ? kToggleContexts : kLabelContexts;
+  return p.vertex_contexts ? kToggleContexts : p.candidate_contexts ? kCandidateContexts : kLabelContexts;
 }
 
 /// Context of every tetrahedron for the compact toggle list (spec 11.5),
 /// from the labels before toggles: 4 · label + min(3, faces on the
 /// interface), a hull face counting for an inside tetrahedron; plus 8 ·
-/// (its candidate faces) when `cand` (candidate_flags()) is given.
+/// (its candidate faces) when `cand` (candidate_flags()) is given; plus 40
+/// when `vertices` and its four vertices are all on the interface.
 std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
-                                          const std::vector<std::uint8_t>* cand = nullptr);
+                                          const std::vector<std::uint8_t>* cand = nullptr, bool vertices = false);
 
 /// The toggled tetrahedra `toggled` (ascending) as ranks within their
 /// contexts under the labels before toggles (encoder side of the above).
 std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetrahedralization& dt,
                                                                      const std::vector<std::uint8_t>& inside,
                                                                      const std::vector<std::uint32_t>& toggled,
-                                                                     const std::vector<std::uint8_t>* cand = nullptr);
+                                                                     const std::vector<std::uint8_t>* cand = nullptr,
+                                                                     bool vertices = false);
 
 /// Number of toggles `p` carries, in either form.
 std::size_t toggle_count(const ReconParams& p);

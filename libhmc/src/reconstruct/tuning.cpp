@@ -31,11 +31,12 @@ std::uint64_t list_bits(std::uint64_t count, std::uint64_t range) {
 }
 
 // The toggle lists of `toggled` (ascending) under the labels `inside`: in
-// the label contexts or, where shorter, the candidate contexts (spec 11.5;
-// 40 empty lists cost 32 bits more than 8).
+// the label contexts or, where shorter, the candidate contexts, with or
+// without the vertex contexts (spec 11.5; 80 empty lists cost 72 bits more
+// than 8).
 struct ToggleCoding {
   std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
-  bool by_candidates = false;
+  bool by_candidates = false, by_vertices = false;
   std::uint64_t bits = 0;
 };
 
@@ -51,8 +52,11 @@ ToggleCoding code_toggles(const Tetrahedralization& dt, const std::vector<std::u
   out.bits = bits(out.ranks, kLabelContexts);
   if (toggled.empty()) return out;
   auto by_candidates = toggle_ranks(dt, inside, toggled, &cand);
-  const std::uint64_t b = bits(by_candidates, kToggleContexts);
-  if (b < out.bits) out = {std::move(by_candidates), true, b};
+  const std::uint64_t b = bits(by_candidates, kCandidateContexts);
+  if (b < out.bits) out = {std::move(by_candidates), true, false, b};
+  auto by_vertices = toggle_ranks(dt, inside, toggled, &cand, true);
+  const std::uint64_t bv = bits(by_vertices, kToggleContexts);
+  if (bv < out.bits) out = {std::move(by_vertices), true, true, bv};
   return out;
 }
 
@@ -682,6 +686,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     auto coding = code_toggles(dt, rule, list, cand);
     best.toggle_ranks = std::move(coding.ranks);
     best.candidate_contexts = coding.by_candidates;
+    best.vertex_contexts = coding.by_vertices;
     if (coding.by_candidates && report) report->candidates = std::move(cand);
   }
   // Hole caps are judged against the input only where the level follows it;
