@@ -1231,36 +1231,35 @@ def hb_rcon_class_list():
     return hand_stream(1, q, lv, [(4, 1, True), (4, 2, True)], rcons=[rc0, rc1, rc2])
 
 
-def hb_rcon_candidate_contexts():
-    # Flag bit 5: 40 toggle contexts, 8 per count of candidate faces. Each
-    # listed context holds 4 tetrahedra at least on its level (contexts 0, 8,
-    # 9, 16, 17, 33, 34 and 36-39 on both, 21 on the first, 18 on the second).
+def hb_rcon_contexts(vertices):
+    # Flag bit 5 (40 toggle contexts) or bits 5 and 6 (80). Each listed
+    # context holds 4 tetrahedra at least on its level: with 40 contexts, 0,
+    # 8, 9, 16, 17, 33, 34 and 36-39 on both, 21 on the first, 18 on the
+    # second; with 80, 44, 52, 60, 61 and 74-78 on the first, 36, 37, 40,
+    # 48, 49, 56-58, 72-74 and 76-79 on the second, whose classes then
+    # travel as a list.
     q = 6
-    pts = sphere_pts(160, q, 44)
-    lv = nested(pts, [60, 160], 45)
+    pts = sphere_pts(180, q, 46) if vertices else sphere_pts(160, q, 44)
+    lv = nested(pts, [70, 180], 47) if vertices else nested(pts, [60, 160], 45)
     n0, n1 = len(lv[0]), len(lv[1])
-    rc0 = rcon_payload(n0, flags=1, multipliers=(900,), compact=True, candidate_contexts=True,
-                       toggles={9: (0,), 16: (0, 2), 21: (3,), 36: (1,)})
-    rc1 = rcon_payload(n1, flags=1, multipliers=(700, 1800), compact=True, candidate_contexts=True, group=2,
-                       classes=[i % 3 // 2 for i in range(n1)], toggles={0: (0,), 8: (1,), 18: (2,), 39: (0, 3)})
+    flags = dict(flags=1, compact=True, candidate_contexts=True, vertex_contexts=vertices)
+    if vertices:
+        rc0 = rcon_payload(n0, multipliers=(900,), toggles={44: (0,), 60: (1, 3), 78: (2,)}, **flags)
+        rc1 = rcon_payload(n1, multipliers=(700, 1800), common=0, classes=[1 if i % 9 == 0 else 0 for i in range(n1)],
+                           toggles={37: (0,), 48: (3,), 57: (1, 2), 79: (0,)}, **flags)
+    else:
+        rc0 = rcon_payload(n0, multipliers=(900,), toggles={9: (0,), 16: (0, 2), 21: (3,), 36: (1,)}, **flags)
+        rc1 = rcon_payload(n1, multipliers=(700, 1800), group=2, classes=[i % 3 // 2 for i in range(n1)],
+                           toggles={0: (0,), 8: (1,), 18: (2,), 39: (0, 3)}, **flags)
     return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
+
+
+def hb_rcon_candidate_contexts():
+    return hb_rcon_contexts(vertices=False)
 
 
 def hb_rcon_vertex_contexts():
-    # Flag bits 5 and 6: 80 toggle contexts. Each listed context holds 4
-    # tetrahedra at least on its level (44, 52, 60, 61 and 74-78 on the
-    # first; 36, 37, 40, 48, 49, 56-58, 72-74 and 76-79 on the second); the
-    # second level's classes travel as a list.
-    q = 6
-    pts = sphere_pts(180, q, 46)
-    lv = nested(pts, [70, 180], 47)
-    n0, n1 = len(lv[0]), len(lv[1])
-    rc0 = rcon_payload(n0, flags=1, multipliers=(900,), compact=True, candidate_contexts=True, vertex_contexts=True,
-                       toggles={44: (0,), 60: (1, 3), 78: (2,)})
-    rc1 = rcon_payload(n1, flags=1, multipliers=(700, 1800), compact=True, candidate_contexts=True, vertex_contexts=True,
-                       common=0, classes=[1 if i % 9 == 0 else 0 for i in range(n1)],
-                       toggles={37: (0,), 48: (3,), 57: (1, 2), 79: (0,)})
-    return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
+    return hb_rcon_contexts(vertices=True)
 
 
 def hb_rcon_compact_volume():

@@ -343,25 +343,21 @@ b.put(0, 1); b.put(1, 1)                              # point 4 class 0, point 2
 rc = bytes([1 | 4 | 16, 6, 0, 3]) + varint(400) + varint(900) + varint(3000) + b.bytes() + bytes([0, 0, 0xff])
 put("recon", "class-list", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
 
-# Candidate contexts (RCON flag bit 5): 40 toggle lists, rank 1 in context 9.
-b = Bits()
-for j in range(40):
-    if j == 9:
-        b.ue(1); b.put(0, 5); b.put(0b10, 2)  # Rice parameter 0: gap 1 is 10
-    else:
-        b.ue(0)
-rc = bytes([1 | 4 | 32, 6, 0, 1]) + varint(900) + bytes([0, 0]) + b.bytes()
-put("recon", "candidate-contexts", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
+# Candidate contexts (RCON flag bit 5): 40 toggle lists, rank 1 in context
+# 9; vertex contexts (bits 5 and 6): 80 lists, rank 0 in context 60.
+def one_toggle_rcon(flags, contexts, at, rank):
+    b = Bits()
+    for j in range(contexts):
+        if j == at:
+            b.ue(1); b.put(0, 5); b.put((1 << (rank + 1)) - 2, rank + 1)  # Rice parameter 0: rank 1s, a 0
+        else:
+            b.ue(0)
+    return bytes([flags, 6, 0, 1]) + varint(900) + bytes([0, 0]) + b.bytes()
 
-# Vertex contexts (flag bits 5 and 6): 80 lists, rank 0 in context 60.
-b = Bits()
-for j in range(80):
-    if j == 60:
-        b.ue(1); b.put(0, 5); b.put(0, 1)  # Rice parameter 0: gap 0 is 0
-    else:
-        b.ue(0)
-rc = bytes([1 | 4 | 32 | 64, 6, 0, 1]) + varint(900) + bytes([0, 0]) + b.bytes()
-put("recon", "vertex-contexts", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
+for name, flags, contexts, at, rank in (("candidate-contexts", 1 | 4 | 32, 40, 9, 1),
+                                        ("vertex-contexts", 1 | 4 | 32 | 64, 80, 60, 0)):
+    put("recon", name, bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) +
+        one_toggle_rcon(flags, contexts, at, rank))
 
 # --- roundtrip: q - 1, flags, seed, then 12 bytes per point --------------
 def rt(q, flags, seed, coords, fmt):

@@ -586,8 +586,8 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     }
     if (best.scale_rank == rank) best_scale = std::move(scale);
   }
-  // The thesis' filters (§2.3.2): keep each one that lowers the labels the
-  // rule gets wrong (or, on coarser levels, the repairs it needs).
+  // The thesis' filters (§2.3.2): keep each one that makes the corrections
+  // of what the rule gets wrong cheaper (coarser levels repair instead).
   {
     const auto& scale = best_scale;
     std::uint64_t current = best_mismatch, current_bits = best_correction_bits;  // cost(best, scale), known
