@@ -854,16 +854,22 @@ std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetra
                                                                      const std::vector<std::uint32_t>& toggled,
                                                                      const std::vector<std::uint8_t>* cand,
                                                                      bool vertices) {
-  const auto ctx = toggle_contexts(dt, inside, cand, vertices);
+  return toggle_ranks(toggle_contexts(dt, inside, cand, vertices), toggled, kToggleContexts);
+}
+
+std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const std::vector<std::uint8_t>& ctx,
+                                                                     const std::vector<std::uint32_t>& toggled,
+                                                                     int contexts) {
   std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
   std::array<std::uint32_t, kToggleContexts> seen{};
   std::size_t next = 0;
   for (std::size_t t = 0; t < ctx.size(); ++t) {
+    const int c = ctx[t] % contexts;
     if (next < toggled.size() && toggled[next] == t) {
-      ranks[ctx[t]].push_back(seen[ctx[t]]);
+      ranks[static_cast<std::size_t>(c)].push_back(seen[static_cast<std::size_t>(c)]);
       ++next;
     }
-    ++seen[ctx[t]];
+    ++seen[static_cast<std::size_t>(c)];
   }
   return ranks;
 }

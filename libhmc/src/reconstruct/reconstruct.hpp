@@ -146,6 +146,13 @@ std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetra
                                                                      const std::vector<std::uint8_t>* cand = nullptr,
                                                                      bool vertices = false);
 
+/// The same from contexts already computed (toggle_contexts()), taken
+/// modulo `contexts`: the 80 contexts give the 40 (modulo 40) and the 8
+/// (modulo 8), so one pass serves the three sets.
+std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const std::vector<std::uint8_t>& ctx,
+                                                                     const std::vector<std::uint32_t>& toggled,
+                                                                     int contexts);
+
 /// Number of toggles `p` carries, in either form.
 std::size_t toggle_count(const ReconParams& p);
 

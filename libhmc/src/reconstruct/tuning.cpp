@@ -48,13 +48,17 @@ ToggleCoding code_toggles(const Tetrahedralization& dt, const std::vector<std::u
     return b;
   };
   ToggleCoding out;
-  out.ranks = toggle_ranks(dt, inside, toggled);
+  if (toggled.empty()) {
+    out.bits = bits(out.ranks, kLabelContexts);
+    return out;
+  }
+  const auto ctx = toggle_contexts(dt, inside, &cand, true);
+  out.ranks = toggle_ranks(ctx, toggled, kLabelContexts);
   out.bits = bits(out.ranks, kLabelContexts);
-  if (toggled.empty()) return out;
-  auto by_candidates = toggle_ranks(dt, inside, toggled, &cand);
+  auto by_candidates = toggle_ranks(ctx, toggled, kCandidateContexts);
   const std::uint64_t b = bits(by_candidates, kCandidateContexts);
   if (b < out.bits) out = {std::move(by_candidates), true, false, b};
-  auto by_vertices = toggle_ranks(dt, inside, toggled, &cand, true);
+  auto by_vertices = toggle_ranks(ctx, toggled, kToggleContexts);
   const std::uint64_t bv = bits(by_vertices, kToggleContexts);
   if (bv < out.bits) out = {std::move(by_vertices), true, true, bv};
   return out;
