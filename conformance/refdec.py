@@ -846,7 +846,9 @@ def parse_rcon(payload, n, form=1):
         for j in range(len(toggles)):
             toggles[j] = len(rice_list(br, "toggle rank of context %d" % j))
         br.finish()
-    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list, "candidate_contexts": candidate_contexts, "vertex_contexts": vertex_contexts, "scale_rank": k, "filters": thresholds,
+    return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list,
+            "candidate_contexts": candidate_contexts, "vertex_contexts": vertex_contexts, "scale_rank": k,
+            "filters": thresholds,
             "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
             "drops": len(drops)}
 

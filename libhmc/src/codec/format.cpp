@@ -268,7 +268,8 @@ std::vector<std::uint8_t> write_toggle_ranks(const std::array<std::vector<std::u
   for (int j = 0; j < kToggleContexts; ++j) {
     if (j < contexts) write_rice_list(bw, ranks[static_cast<std::size_t>(j)]);
     else if (!ranks[static_cast<std::size_t>(j)].empty())
-      fail(Status::internal_error, "RCON: toggle ranks in context " + std::to_string(j) + " of " + std::to_string(contexts));
+      fail(Status::internal_error,
+           "RCON: toggle ranks in context " + std::to_string(j) + " of " + std::to_string(contexts));
   }
   return bw.finish();
 }
