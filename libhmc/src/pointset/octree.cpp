@@ -306,8 +306,6 @@ class DepthNodes {
   mutable std::optional<KdTree<std::int64_t>> tree_;
 };
 
-
-
 // Coder 3 with `classes` contexts per ranked depth, from the plain and
 // ranked symbols of every depth (ranked[d][i], context[d][i]) and each
 // depth's gap weight and quadric flag; coder 2 (no flags) unless `causal`.
