@@ -75,8 +75,9 @@ class LatticeNeighbours {
   static constexpr std::int32_t kSide = (1 << kBlockBits) + 2 * kMargin;
   static constexpr int kMaxCandidates = 64;
   static constexpr std::uint32_t kMaxScan = 1024;  // distances computed per search, at most
+  static_assert(kSide <= 16, "a column's occupancy is 16 bits");
   struct Offset {
-    std::int32_t dx, dy, dz, r2, ring;
+    std::int32_t dx, dy, dz, r2;
   };
   struct Block {
     std::uint64_t key;
@@ -136,28 +137,41 @@ class LatticeNeighbours {
     };
     std::uint32_t scanned = 0;
     std::int32_t ring = 0;
-    for (const Offset& o : rings()) {
-      if (o.ring != ring) {
-        if (settled(ring)) break;
-        ring = o.ring;
-      }
-      const Range& range = at(base, o);
-      // Crowded buckets (a cluster among sparse nodes) are left to the
-      // k-d tree: the work per node stays bounded whatever the input.
-      scanned += range.end - range.begin;
-      if (scanned > kMaxScan) return -1;
-      for (std::uint32_t j = range.begin; j < range.end; ++j) {
-        std::uint64_t d2 = 0;
-        for (std::size_t a = 0; a < 3; ++a) {
-          const std::int64_t t = std::int64_t{cells_[j][a]} - std::int64_t{c[a]};
-          d2 += static_cast<std::uint64_t>(t * t);
+    // Ring r: the buckets whose largest offset is r. A column (dx, dy) of
+    // the ring's square holds all its buckets dz = -r ... r when |dx| or
+    // |dy| is r, else only dz = -r and r; the column's occupancy bits pick
+    // the non-empty ones. The order within a ring changes nothing: the k
+    // best are kept by (distance, index), and a ring is always read whole.
+    for (;; ++ring) {
+      const std::int32_t lo = base[2] - ring, hi = base[2] + ring;
+      const unsigned span = ((2u << hi) - 1u) & ~((1u << lo) - 1u);  // bits lo ... hi
+      const unsigned ends = (1u << lo) | (1u << hi);
+      for (std::int32_t dx = -ring; dx <= ring; ++dx)
+        for (std::int32_t dy = -ring; dy <= ring; ++dy) {
+          const std::size_t column = static_cast<std::size_t>((base[0] + dx) * kSide + base[1] + dy);
+          const bool edge = dx == -ring || dx == ring || dy == -ring || dy == ring;
+          for (unsigned bits = occupied_[column] & (edge ? span : ends); bits != 0; bits &= bits - 1) {
+            const Range& range = grid_[column * kSide + static_cast<std::size_t>(__builtin_ctz(bits))];
+            // Crowded buckets (a cluster among sparse nodes) are left to the
+            // k-d tree: the work per node stays bounded whatever the input.
+            scanned += range.end - range.begin;
+            if (scanned > kMaxScan) return -1;
+            for (std::uint32_t j = range.begin; j < range.end; ++j) {
+              std::uint64_t d2 = 0;
+              for (std::size_t a = 0; a < 3; ++a) {
+                const std::int64_t t = std::int64_t{cells_[j][a]} - std::int64_t{c[a]};
+                d2 += static_cast<std::uint64_t>(t * t);
+              }
+              const Hit h{d2, j};
+              if (n == k && !(h < best[static_cast<std::size_t>(k - 1)])) continue;
+              int p = n < k ? n++ : k - 1;
+              for (; p > 0 && h < best[static_cast<std::size_t>(p - 1)]; --p)
+                best[static_cast<std::size_t>(p)] = best[static_cast<std::size_t>(p - 1)];
+              best[static_cast<std::size_t>(p)] = h;
+            }
+          }
         }
-        const Hit h{d2, j};
-        if (n == k && !(h < best[static_cast<std::size_t>(k - 1)])) continue;
-        int p = n < k ? n++ : k - 1;
-        for (; p > 0 && h < best[static_cast<std::size_t>(p - 1)]; --p) best[static_cast<std::size_t>(p)] = best[static_cast<std::size_t>(p - 1)];
-        best[static_cast<std::size_t>(p)] = h;
-      }
+      if (ring == kMargin || settled(ring)) break;
     }
     if (!settled(ring)) return -1;
     for (int j = 0; j < k; ++j) out[j] = best[static_cast<std::size_t>(j)].index;
@@ -165,13 +179,13 @@ class LatticeNeighbours {
   }
 
   // Every offset within kMargin buckets in each coordinate, with its squared
-  // length and ring (largest coordinate difference).
+  // length.
   static std::vector<Offset> cube() {
     std::vector<Offset> v;
     for (std::int32_t x = -kMargin; x <= kMargin; ++x)
       for (std::int32_t y = -kMargin; y <= kMargin; ++y)
         for (std::int32_t z = -kMargin; z <= kMargin; ++z)
-          v.push_back({x, y, z, x * x + y * y + z * z, std::max({std::abs(x), std::abs(y), std::abs(z)})});
+          v.push_back({x, y, z, x * x + y * y + z * z});
     return v;
   }
   // Those within kMargin (Euclidean), by squared length.
@@ -184,21 +198,13 @@ class LatticeNeighbours {
     }();
     return list;
   }
-  // All of them, ring by ring.
-  static const std::vector<Offset>& rings() {
-    static const std::vector<Offset> list = [] {
-      std::vector<Offset> v = cube();
-      std::stable_sort(v.begin(), v.end(), [](const Offset& a, const Offset& b) { return a.ring < b.ring; });
-      return v;
-    }();
-    return list;
-  }
 
   // Fill the grid with the buckets of the block `key` and of the blocks
   // around it that lie within kMargin buckets of it.
   void load(std::uint64_t key) {
     for (std::uint32_t at : written_) grid_[at] = Range{0, 0};
     written_.clear();
+    std::fill(occupied_.begin(), occupied_.end(), 0);
     loaded_ = key;
     const GridPoint b = morton_point(key, depth_ - bits_);
     const std::int32_t side = 1 << bits_;
@@ -231,6 +237,7 @@ class LatticeNeighbours {
             if (r.begin == r.end) {  // nodes of one bucket are consecutive
               r = Range{j, j + 1};
               written_.push_back(at);
+              occupied_[at / kSide] = static_cast<std::uint16_t>(occupied_[at / kSide] | (1u << (at % kSide)));
             } else {
               r.end = j + 1;
             }
@@ -243,6 +250,7 @@ class LatticeNeighbours {
   int shift_, depth_, bits_;  // depth_: of the buckets
   std::vector<Block> blocks_;
   std::vector<Range> grid_;
+  std::vector<std::uint16_t> occupied_ = std::vector<std::uint16_t>(kSide * kSide, 0);  // per column (x, y): bit z
   std::vector<std::uint32_t> written_;
   std::uint64_t loaded_ = ~std::uint64_t{0};
   std::int32_t origin_[3] = {0, 0, 0};

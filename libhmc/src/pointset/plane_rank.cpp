@@ -79,25 +79,26 @@ Frame frame_of(const std::array<std::int64_t, 3>& n, std::size_t j) {
 // 2^-40 times its diagonal entry.
 bool fit_quadric(const Doubled* neighbours, int f, const std::array<std::int64_t, 3>& o, const Frame& frame,
                  std::array<double, 6>& coef) {
-  // beta[i] = (1, u, v, u^2, uv, v^2) and w of point i; then each sum is
-  // accumulated over the points in order in a register of its own (the
-  // same additions in the same order as point by point, without a chain
-  // through memory).
+  // beta[i] = (1, u, v, u^2, uv, v^2) and w of point i.
   std::array<std::array<double, 7>, kMaxRankPoints> beta;
   for (int i = 0; i < f; ++i) {
     const auto p = frame.of({neighbours[i][0] - o[0], neighbours[i][1] - o[1], neighbours[i][2] - o[2]});
     const double u = p[0], v = p[1];
     beta[static_cast<std::size_t>(i)] = {1.0, u, v, u * u, u * v, v * v, p[2]};
   }
-  double m[6][6] = {}, r[6] = {};
-  for (std::size_t x = 0; x < 6; ++x) {
-    for (std::size_t y = x; y < 7; ++y) {
-      double acc = 0.0;
-      for (std::size_t i = 0; i < static_cast<std::size_t>(f); ++i) acc = acc + beta[i][x] * beta[i][y];
-      if (y < 6) m[x][y] = acc;
-      else r[x] = acc;
-    }
+  // The 27 sums (m[x][y] for y >= x, then r[x] as column 6) advance
+  // together, point by point: independent chains the processor overlaps,
+  // each still summed in point order (the same result as one sum at a time).
+  double sum[27] = {};
+  for (std::size_t i = 0; i < static_cast<std::size_t>(f); ++i) {
+    const auto& b = beta[i];
+    std::size_t at = 0;
+    for (std::size_t x = 0; x < 6; ++x)
+      for (std::size_t y = x; y < 7; ++y, ++at) sum[at] = sum[at] + b[x] * b[y];
   }
+  double m[6][6] = {}, r[6] = {};
+  for (std::size_t x = 0, at = 0; x < 6; ++x)
+    for (std::size_t y = x; y < 7; ++y, ++at) (y < 6 ? m[x][y] : r[x]) = sum[at];
   // m = L D L^T, L unit lower triangular (l[z][x], x < z).
   double l[6][6] = {}, dg[6] = {};
   for (std::size_t x = 0; x < 6; ++x) {
