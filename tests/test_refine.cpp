@@ -759,6 +759,115 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
   CHECK(all == plain);  // every child is equally far from the node's own centre
 }
 
+// ChildKeys packs each child's ranking key (spec 8A.1 step 5, 8A.4's kappa,
+// 8.4's gap skipping the node itself) into one integer; order() and
+// symbol() must rank exactly as the keys compared one by one, up to the
+// magnitudes the spec allows (q = 21, 32 points, weight 15).
+TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
+  __extension__ typedef __int128 I128;
+  // Spec 8A.1 "Reduction to B bits".
+  const auto reduce = [](std::vector<std::int64_t> v, int bits) {
+    std::uint64_t m = 0;
+    for (auto x : v) m = std::max<std::uint64_t>(m, static_cast<std::uint64_t>(x < 0 ? -x : x));
+    int len = 0;
+    while (len < 64 && (m >> len) != 0) ++len;
+    const int sh = std::max(0, len - bits);
+    for (auto& x : v) x = x < 0 ? -((-x) >> sh) : x >> sh;
+    return v;
+  };
+  std::mt19937_64 rng(11);
+  int cases = 0, gapped_cases = 0;
+  I128 lowest = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    // Every seventh node at the origin with its neighbours far away: gap
+    // terms near their bound of 2^104 (32 neighbours, weight 15).
+    const bool far = trial % 7 == 0;
+    const int q = trial % 3 == 0 || far ? 21 : 1 + static_cast<int>(rng() % 21);
+    const int d = far ? q - 1 : static_cast<int>(rng() % static_cast<std::uint64_t>(q));
+    const std::int64_t h = std::int64_t{1} << (q - d);
+    const std::uint32_t cells = 1u << d;
+    const GridPoint node = far ? GridPoint{0, 0, 0}
+                               : GridPoint{static_cast<std::uint32_t>(rng() % cells),
+                                           static_cast<std::uint32_t>(rng() % cells),
+                                           static_cast<std::uint32_t>(rng() % cells)};
+    const int k = far ? kMaxRankPoints : 1 + static_cast<int>(rng() % kMaxRankPoints);
+    const int gap_from = static_cast<int>(rng() % 2);
+    const int gap = far ? 15 : static_cast<int>(rng() % 16);
+    std::vector<Doubled> nb(static_cast<std::size_t>(k));
+    const std::uint64_t span = std::uint64_t{2} << q;  // doubled coordinates below 2^(q+1)
+    for (auto& x : nb) {
+      for (std::size_t a = 0; a < 3; ++a)
+        x[a] = static_cast<std::int32_t>(trial % 5 == 0 ? (rng() % 2) * (span - 1) : rng() % span);
+      if (far) {  // at the far corner, on the plane x = y, which passes through the node
+        const std::uint64_t u = rng() % 256, w = rng() % 256;
+        x = {static_cast<std::int32_t>(span - 1 - u), static_cast<std::int32_t>(span - 1 - u),
+             static_cast<std::int32_t>(span - 1 - w)};
+      }
+    }
+    const unsigned mask = trial % 4 == 0 ? static_cast<unsigned>(rng() % 256) : 0u;
+    const ChildKeys keys(node, d, q, nb.data(), k, true, gap_from);
+    // The spec's keys, computed plainly.
+    std::int64_t s[3] = {0, 0, 0};
+    for (const auto& x : nb)
+      for (std::size_t a = 0; a < 3; ++a) s[a] += x[a];
+    std::vector<std::int64_t> m(6, 0);
+    const int pairs[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    for (int e = 0; e < 6; ++e) {
+      std::int64_t sum = 0;
+      const auto a = static_cast<std::size_t>(pairs[e][0]), b = static_cast<std::size_t>(pairs[e][1]);
+      for (const auto& x : nb) sum += std::int64_t{x[a]} * x[b];
+      m[static_cast<std::size_t>(e)] = k * sum - s[pairs[e][0]] * s[pairs[e][1]];
+    }
+    m = reduce(m, 31);
+    const std::int64_t xx = m[0], yy = m[1], zz = m[2], xy = m[3], xz = m[4], yz = m[5];
+    const std::int64_t dg[3] = {yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy};
+    const std::int64_t axy = xz * yz - xy * zz, axz = xy * yz - xz * yy, ayz = xy * xz - xx * yz;
+    const int j = dg[1] > dg[0] ? (dg[2] > dg[1] ? 2 : 1) : (dg[2] > dg[0] ? 2 : 0);
+    std::vector<std::int64_t> n = j == 0 ? std::vector<std::int64_t>{dg[0], axy, axz}
+                                  : j == 1 ? std::vector<std::int64_t>{axy, dg[1], ayz}
+                                           : std::vector<std::int64_t>{axz, ayz, dg[2]};
+    n = reduce(n, 20);
+    const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    const bool gapped = gap > 0 && n2 > 0 && gap_from < k;
+    gapped_cases += gapped;
+    std::array<std::tuple<int, I128, std::int64_t, std::int64_t, int>, 8> key;
+    for (int c = 0; c < 8; ++c) {
+      std::int64_t u[3], t = 0, e = 0, g = INT64_MAX;
+      for (std::size_t a = 0; a < 3; ++a) {
+        u[a] = (2 * std::int64_t{node[a]} + ((c >> (2 - a)) & 1)) * h + h / 2;
+        const std::int64_t v = k * u[a] - s[a];
+        t += n[a] * v;
+        e += v * v;
+      }
+      for (int i = gap_from; i < k; ++i) {
+        std::int64_t d2 = 0;
+        for (std::size_t a = 0; a < 3; ++a) {
+          const std::int64_t w = u[a] - nb[static_cast<std::size_t>(i)][a];
+          d2 += w * w;
+        }
+        g = std::min(g, d2);
+      }
+      t = t < 0 ? -t : t;
+      const I128 kappa = gapped ? 32 * I128{t} * t - I128{gap} * k * k * n2 * g : 0;
+      key[static_cast<std::size_t>(c)] = {(mask >> c) & 1u ? 0 : 1, kappa, t, e, c};
+      if (kappa < lowest) lowest = kappa;
+    }
+    std::array<int, 8> want{}, got{};
+    std::iota(want.begin(), want.end(), 0);
+    std::sort(want.begin(), want.end(),
+              [&](int a, int b) { return key[static_cast<std::size_t>(a)] < key[static_cast<std::size_t>(b)]; });
+    keys.order(mask, gap, got);
+    INFO("trial " << trial << ", q " << q << ", d " << d << ", k " << k << ", gap " << gap);
+    CHECK(got == want);
+    const unsigned occupancy = 1u + static_cast<unsigned>(rng() % 255);
+    CHECK(keys.symbol(mask, gap, occupancy) == ranked_symbol(want, occupancy));
+    ++cases;
+  }
+  CHECK(cases == 3000);
+  CHECK(gapped_cases > 1000);  // the gap term decides many of them
+  CHECK(lowest < -(I128{1} << 100));  // near the largest magnitudes any input reaches
+}
+
 // The sorting and Morton helpers every layer decoder ends with.
 TEST_CASE("radix_sort, morton_point and sort_canonical agree with the plain definitions") {
   std::mt19937_64 rng(5);

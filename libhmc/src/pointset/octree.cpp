@@ -282,16 +282,13 @@ class DepthNodes {
                                                            int neighbours, const std::uint8_t* causal,
                                                            int& context) const {
     std::array<std::uint8_t, 2 * kGapChoices.size()> out{};
-    std::array<int, 8> order{};
     std::array<Doubled, kCausalPoints> nb{};
     const int count = points(i, neighbours, causal, nb);
     for (const bool quadric : {false, true}) {
       if (quadric && !causal) break;
       const ChildKeys k = keys_of(node, nb, count, true, quadric, context);
-      for (std::size_t g = 0; g < kGapChoices.size(); ++g) {
-        k.order(0u, kGapChoices[g], order);
-        out[(quadric ? kGapChoices.size() : 0) + g] = ranked_symbol(order, occupancy);
-      }
+      for (std::size_t g = 0; g < kGapChoices.size(); ++g)
+        out[(quadric ? kGapChoices.size() : 0) + g] = k.symbol(0u, kGapChoices[g], occupancy);
     }
     return out;
   }

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <numeric>
 
 namespace hmc::detail {
 
@@ -156,6 +155,7 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
                                            : std::array<std::int64_t, 3>{axz, ayz, diag[2]};
   reduce(n, 20);
 
+  std::array<std::int64_t, 8> t{}, e{};  // plane (or quadric) and centroid keys
   int above = 0, below = 0;
   for (std::size_t c = 0; c < 8; ++c) {
     std::int64_t dot = 0, len = 0;
@@ -165,8 +165,8 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
       dot += n[a] * v;
       len += v * v;
     }
-    t_[c] = dot < 0 ? -dot : dot;
-    e_[c] = len;
+    t[c] = dot < 0 ? -dot : dot;
+    e[c] = len;
     above += dot > 0;
     below += dot < 0;
   }
@@ -187,16 +187,29 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
       const double fitted = coef[0] + coef[1] * u + coef[2] * v + coef[3] * (u * u) + coef[4] * (u * v) +
                             coef[5] * (v * v);
       const double key = std::fabs(x[2] - fitted) * static_cast<double>(k);
-      t_[c] = key < 0x1p47 ? static_cast<std::int64_t>(key) : std::int64_t{1} << 47;
+      t[c] = key < 0x1p47 ? static_cast<std::int64_t>(key) : std::int64_t{1} << 47;
     }
+  }
+  // Each child's place in the order by (t_c, e_c, c), the ranking's last
+  // keys whatever the gap weight.
+  for (std::size_t c = 0; c < 8; ++c) {
+    int place = 0;
+    for (std::size_t o = 0; o < 8; ++o)
+      place += t[o] < t[c] || (t[o] == t[c] && (e[o] < e[c] || (e[o] == e[c] && o < c)));
+    tie_[c] = static_cast<std::uint8_t>(place);
   }
   // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
   // the squared distance from the child's centre to its nearest neighbour.
   // t_c / (k |n|) is the child's distance to the plane, so both terms are
-  // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^101.
+  // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^104.
+  // order() sorts the children by one integer each, (not in the mask, then
+  // kappa_c, then the place by (t, e, c)): kappa_c + 2^106 from bit 3, the
+  // place in bits 0-2, the mask in bit 112; here base_c = that integer for
+  // G = 0 and step_c = its decrease per unit of G.
   const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
   if (!with_gaps || n2 == 0 || gap_from >= k) return;
-  weight_ = std::int64_t{k} * k * n2;
+  gapped_ = true;
+  const std::int64_t weight = std::int64_t{k} * k * n2;
   for (std::size_t c = 0; c < 8; ++c) {
     std::int64_t g = INT64_MAX;
     for (int i = gap_from; i < k; ++i) {
@@ -208,26 +221,40 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
       }
       g = std::min(g, d2);
     }
-    g_[c] = g;
+    base_[c] = (static_cast<UInt128>(32 * static_cast<Int128>(t[c]) * t[c] + (Int128{1} << 106)) << 3) + tie_[c];
+    step_[c] = static_cast<UInt128>(static_cast<Int128>(weight) * g) << 3;
   }
 }
 
+// The sort key of child c (see the constructor), distinct for each child.
+ChildKeys::UInt128 ChildKeys::key(unsigned first_mask, int gap, std::size_t c) const {
+  return (((first_mask >> c) & 1u) ? 0 : UInt128{1} << 112) +
+         (gap > 0 && gapped_ ? base_[c] - static_cast<UInt128>(gap) * step_[c] : tie_[c]);
+}
+
 void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) const {
-  std::array<Int128, 8> kappa{};
-  const bool gapped = gap > 0 && weight_ > 0;
-  if (gapped)
-    for (std::size_t c = 0; c < 8; ++c)
-      kappa[c] = 32 * static_cast<Int128>(t_[c]) * t_[c] - static_cast<Int128>(gap) * weight_ * g_[c];
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const unsigned ca = (first_mask >> a) & 1u, cb = (first_mask >> b) & 1u;
-    if (ca != cb) return ca > cb;
-    const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
-    if (gapped && kappa[ua] != kappa[ub]) return kappa[ua] < kappa[ub];
-    if (t_[ua] != t_[ub]) return t_[ua] < t_[ub];
-    if (e_[ua] != e_[ub]) return e_[ua] < e_[ub];
-    return a < b;
-  });
+  std::array<UInt128, 8> keys{};
+  for (std::size_t c = 0; c < 8; ++c) keys[c] = key(first_mask, gap, c);
+  // Insertion sort; the keys are distinct.
+  for (std::size_t c = 0; c < 8; ++c) {
+    std::size_t r = c;
+    for (; r > 0 && keys[static_cast<std::size_t>(order[r - 1])] > keys[c]; --r) order[r] = order[r - 1];
+    order[r] = static_cast<int>(c);
+  }
+}
+
+std::uint8_t ChildKeys::symbol(unsigned first_mask, int gap, unsigned occupancy) const {
+  std::array<UInt128, 8> keys{};
+  for (std::size_t c = 0; c < 8; ++c) keys[c] = key(first_mask, gap, c);
+  // An occupied child's rank is the number of children with smaller keys.
+  unsigned ranked = 0;
+  for (unsigned occ = occupancy & 0xFFu; occ != 0; occ &= occ - 1) {
+    const auto c = static_cast<std::size_t>(__builtin_ctz(occ));
+    int rank = 0;
+    for (std::size_t o = 0; o < 8; ++o) rank += keys[o] < keys[c];
+    ranked |= 1u << rank;
+  }
+  return occupancy_order().index[ranked];
 }
 
 void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,

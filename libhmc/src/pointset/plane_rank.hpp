@@ -68,10 +68,16 @@ class ChildKeys {
   /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;
   /// above 0 only when constructed `with_gaps`).
   void order(unsigned first_mask, int gap, std::array<int, 8>& order) const;
+  /// ranked_symbol() of `occupancy` (not 0) under that ranking, without
+  /// sorting: the encoders' trials of several weights.
+  std::uint8_t symbol(unsigned first_mask, int gap, unsigned occupancy) const;
 
  private:
-  std::array<std::int64_t, 8> t_{}, e_{}, g_{};
-  std::int64_t weight_ = 0;  // k^2 |n|^2, or 0: no gap term
+  __extension__ typedef unsigned __int128 UInt128;
+  UInt128 key(unsigned first_mask, int gap, std::size_t c) const;
+  std::array<std::uint8_t, 8> tie_{};  // each child's place by (t, e, child number)
+  bool gapped_ = false;                // a gap weight changes the order (k^2 |n|^2 > 0)
+  std::array<UInt128, 8> base_{}, step_{};  // the sort keys (constructor)
   int split_ = 0;
 };
 

@@ -335,9 +335,7 @@ class Traversal {
     symbols.push_back(symbol);
     const std::size_t row = (static_cast<std::size_t>(d) * 9 + symbol.weight) * 2 + symbol.plane;
     for (std::size_t j = 0; j < gaps_.size(); ++j) {
-      std::array<int, 8> other{};
-      coarse_.last_keys().order(mask, gaps_[j], other);
-      ++counts[j][row * kAlphabet + ranked_symbol(other, occ)];
+      ++counts[j][row * kAlphabet + coarse_.last_keys().symbol(mask, gaps_[j], occ)];
     }
     if (d + 1 == q_) return;
     for (std::size_t c = 0; c < 8; ++c)
