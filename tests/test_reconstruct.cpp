@@ -1084,6 +1084,8 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
   const auto fine_labels = truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces, &cache);
   CHECK(fine_labels == truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces));
   CHECK(cache.entries.size() == dt_fine.tets.size());
+  const WindingNumber* tree = cache.tree.get();  // built once for the surface
+  REQUIRE(tree != nullptr);
   // Tetrahedra the coarser level keeps: the cache answers for them.
   std::size_t kept = 0;
   for (const auto& t : dt_coarse.tets) {
@@ -1098,6 +1100,7 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
   WindingCache spoiled = cache;
   const auto plain = truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces);
   CHECK(truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces, &cache) == plain);
+  CHECK(cache.tree.get() == tree);  // the same surface: the same tree
   // The cache is read, not recomputed: wrong values give other labels.
   for (auto& e : spoiled.entries) e.second = 1 - e.second;
   CHECK(truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces, &spoiled) != plain);
@@ -1115,6 +1118,7 @@ TEST_CASE("truth labels: winding numbers carried to a coarser level give the sam
   CHECK(truth_labels(big, dt_big, big_surface, m.triangles, no_faces, &big_cache) ==
         truth_labels(big, dt_big, big_surface, m.triangles, no_faces));
   CHECK(big_cache.entries.empty());
+  CHECK(big_cache.tree.get() != tree);  // another surface: its own tree
 }
 
 TEST_CASE("boundary faces of tetrahedra: the faces only one of them has, facing out") {

@@ -328,7 +328,13 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
                                        const std::vector<Triangle>& input_faces_on_points, WindingCache* cache) {
   const std::size_t nt = dt.tets.size();
-  WindingNumber wn(surface_points, surface);
+  // The tree of an earlier call on the same surface (the input's, level
+  // after level) is the same tree.
+  std::shared_ptr<const WindingNumber> tree;
+  if (cache && cache->tree_points == &surface_points && cache->tree_surface == &surface) tree = cache->tree;
+  if (!tree) tree = std::make_shared<const WindingNumber>(surface_points, surface);
+  if (cache) cache->tree = tree, cache->tree_points = &surface_points, cache->tree_surface = &surface;
+  const WindingNumber& wn = *tree;
   std::vector<double> w(nt);
   // Tetrahedra in the Morton order of their first vertex (12 bits per
   // axis): consecutive queries then open the same clusters of the winding

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "delaunay/delaunay.hpp"
@@ -12,6 +13,8 @@
 #include "reconstruct/reconstruct.hpp"
 
 namespace hmc::detail {
+
+class WindingNumber;
 
 /// The input's connectivity on the quantization grid: indices into the
 /// level's canonical points. Degenerate elements (merged vertices) dropped.
@@ -40,6 +43,12 @@ struct WindingCache {
   /// |winding number|), sorted by key. Empty when three fields do not fit
   /// in 64 bits (coordinates of 20 bits and more).
   std::vector<std::pair<std::uint64_t, double>> entries;
+  /// The winding-number tree of the surface, built by the first call and
+  /// used by the next ones with the same `surface_points` and `surface`
+  /// objects (it refers to the points, which must outlive the cache).
+  std::shared_ptr<const WindingNumber> tree;
+  const std::vector<Vec3>* tree_points = nullptr;
+  const std::vector<Triangle>* tree_surface = nullptr;
 };
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
