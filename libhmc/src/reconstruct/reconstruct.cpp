@@ -305,10 +305,56 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   for (std::uint32_t t = 0; t < nt; ++t)
     for (auto v : dt.tets[t]) incident[fill[v]++] = t;
   DefectScratch scratch;
+  // face[t]: bit k set when face k of t is on the interface, bit 4 when t
+  // is inside, kept up to date by flip(); back[t], bits 2k and 2k + 1: the
+  // local index of t's face k in the neighbour across it. A vertex's defects
+  // then read a byte per incident tetrahedron, not its neighbours' labels
+  // (most of the repair's time went into those scattered reads).
+  std::vector<std::uint8_t> face(nt, 0), back(nt, 0);
+  for (std::uint32_t t = 0; t < nt; ++t) {
+    unsigned bits = inside[t] ? 16u : 0u, across = 0;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u == kNoTet ? inside[t] != 0 : (inside[u] != 0) != (inside[t] != 0)) bits |= 1u << k;
+      if (u == kNoTet) continue;
+      int j = 0;
+      while (dt.neighbors[u][j] != t) ++j;
+      across |= static_cast<unsigned>(j) << (2 * k);
+    }
+    face[t] = static_cast<std::uint8_t>(bits);
+    back[t] = static_cast<std::uint8_t>(across);
+  }
+  // Inverting t's label puts each of its four faces on the interface or off it.
+  auto flip = [&](std::uint32_t t) {
+    inside[t] ^= 1;
+    face[t] ^= 0x1F;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet) face[u] ^= static_cast<std::uint8_t>(1u << ((back[t] >> (2 * k)) & 3u));
+    }
+  };
   // Is face k of t on the interface when t's label is `label`?
   auto face_on = [&](std::uint32_t t, int k, bool label) {
-    const std::uint32_t u = dt.neighbors[t][k];
-    return u == kNoTet ? label : label != (inside[u] != 0);
+    return (((face[t] >> k) & 1u) != 0) != (label != (inside[t] != 0));
+  };
+  // local_defects(v), from the face bits.
+  auto vertex_defects = [&](std::uint32_t v, bool* on) {
+    std::vector<std::uint32_t>& ends = scratch.ends;
+    ends.clear();
+    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+      const std::uint32_t t = incident[i];
+      const unsigned bits = face[t];
+      if (!(bits & 16u) || !(bits & 15u)) continue;
+      const auto& tet = dt.tets[t];
+      for (int k = 0; k < 4; ++k) {
+        if (!((bits >> k) & 1u) || tet[k] == v) continue;  // the face opposite v does not contain it
+        for (int j = 0; j < 3; ++j) {
+          const std::uint32_t w = tet[kFaceVertices[k][j]];
+          if (w != v) ends.push_back(w);
+        }
+      }
+    }
+    return defects_of_faces(want[v] != 0, scratch, on);
   };
   // Is some face around the edge (tet[i], tet[j]) of t, other than t's own
   // two, on the interface? Walks the ring of tetrahedra around the edge
@@ -352,7 +398,7 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   auto state = [&](std::uint32_t v) {
     if (cache[v] < 0) {
       bool on = false;
-      const int d = local_defects(dt, inside, start, incident, want, v, scratch, &on);
+      const int d = vertex_defects(v, &on);
       cache[v] = 2 * d + (on ? 1 : 0);
     }
     return cache[v];
@@ -363,9 +409,10 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   auto on_interface = [&](std::uint32_t v) {
     for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
       const std::uint32_t t = incident[i];
-      if (!inside[t]) continue;
+      const unsigned bits = face[t];
+      if (!(bits & 16u) || !(bits & 15u)) continue;
       for (int k = 0; k < 4; ++k)  // the face opposite v does not contain it
-        if (dt.tets[t][k] != v && face_on(t, k, true)) return 1;
+        if (((bits >> k) & 1u) && dt.tets[t][k] != v) return 1;
     }
     return 0;
   };
@@ -377,13 +424,17 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   // Does the interface's Euler characteristic stay the same when t flips
   // from `from` to !from? Only t's own vertices, edges and faces can change
   // (on_before/on_after: t's vertices on the interface before and after).
-  auto euler_kept = [&](std::uint32_t t, bool from, int on_before, int on_after) {
+  // `both`: bit k set when t's vertex k is on the interface before the flip
+  // and after it.
+  auto euler_kept = [&](std::uint32_t t, bool from, int on_before, int on_after, unsigned both) {
     int chi = on_after - on_before;
     for (int k = 0; k < 4; ++k) chi += face_on(t, k, !from) - face_on(t, k, from);
     // An edge of t whose own two faces go on (off) the interface leaves
     // (joins) it, -1 (+1), unless another face around it keeps it on: a
-    // walk around the edge tells. The walks come last, and stop as soon as
-    // the edges left cannot bring chi back to 0.
+    // walk around the edge tells, unless an end of the edge is off the
+    // interface before or after the flip (the other faces around the edge
+    // do not change with it, so none of them is on). The walks come last,
+    // and stop as soon as the edges left cannot bring chi back to 0.
     int edge[6][3], ne = 0, lo = 0, hi = 0;
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) {
@@ -401,7 +452,8 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
       if (chi + lo > 0 || chi + hi < 0) return false;  // 0 is out of reach
       const int delta = edge[e][2];
       (delta > 0 ? hi : lo) -= delta;
-      if (!ring_on(t, edge[e][0], edge[e][1])) chi += delta;
+      const int i = edge[e][0], j = edge[e][1];
+      if (!((both >> i) & (both >> j) & 1u) || !ring_on(t, i, j)) chi += delta;
     }
     return chi == 0;
   };
@@ -456,8 +508,9 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         // order does not change the result. Until the defects are
         // recomputed, the cached states of t's vertices describe the labels
         // before the flip, and they are right again once it is undone.
-        inside[t] ^= 1;
+        flip(t);
         int on_after = 0;
+        unsigned both = 0;
         // w stays on the interface when one of t's faces through it is an
         // interface face after the flip; only when none is (all three were
         // before) must its other faces be looked at.
@@ -465,12 +518,14 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
           bool on = false;
           for (int j = 0; j < 4 && !on; ++j)
             if (j != k) on = face_on(t, j, !from);
-          on_after += on ? 1 : on_interface(tv[k]);
+          const int now = on ? 1 : on_interface(tv[k]);
+          on_after += now;
+          both |= static_cast<unsigned>(now & was[k] & 1) << k;
         }
         // Labels are flipped here: euler_kept reads t's label from `from`
         // only, its neighbours' from `inside`.
-        if (!euler_kept(t, from, on_before, on_after)) {
-          inside[t] ^= 1;
+        if (!euler_kept(t, from, on_before, on_after, both)) {
+          flip(t);
           try_failed_at[t] = clock;
           continue;
         }
@@ -480,7 +535,7 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         int after = 0;
         for (int k = 0; k < 4 && after < before; ++k) after += defects(tv[k]);
         if (after >= before) {
-          inside[t] ^= 1;
+          flip(t);
           restore(was);
           try_failed_at[t] = clock;
           continue;
@@ -519,9 +574,14 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
       }
     }
   }
+  return defects_of_faces(want[v] != 0, work, on);
+}
+
+int defects_of_faces(bool wanted, DefectScratch& work, bool* on) {
+  const std::vector<std::uint32_t>& scratch = work.ends;
   const std::size_t faces = scratch.size() / 2;
   if (on) *on = faces > 0;
-  if (faces == 0) return want[v] ? 1 : 0;
+  if (faces == 0) return wanted ? 1 : 0;
   // (w, face) for both ends w of every face's edges (v, w), sorted by w.
   std::vector<std::uint64_t>& ends = work.sorted;
   ends.resize(scratch.size());

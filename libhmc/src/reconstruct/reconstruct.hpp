@@ -124,6 +124,11 @@ int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>&
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                   const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work, bool* on = nullptr);
 
+/// The count of local_defects() from the interface faces around a vertex,
+/// listed in work.ends as the pairs of their other two vertices; `wanted`:
+/// whether the vertex should be on the interface.
+int defects_of_faces(bool wanted, DefectScratch& work, bool* on = nullptr);
+
 /// Number of toggle contexts of `p`: kToggleContexts with vertex contexts,
 /// kCandidateContexts with candidate contexts alone, else kLabelContexts.
 inline int toggle_context_count(const ReconParams& p) {
