@@ -780,7 +780,8 @@ TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
   I128 lowest = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     // Every seventh node at the origin with its neighbours far away: gap
-    // terms near their bound of 2^104 (32 neighbours, weight 15).
+    // terms beyond 2^100, about the largest any input reaches (32
+    // neighbours, weight 15; the spec bounds them by 2^104).
     const bool far = trial % 7 == 0;
     const int q = trial % 3 == 0 || far ? 21 : 1 + static_cast<int>(rng() % 21);
     const int d = far ? q - 1 : static_cast<int>(rng() % static_cast<std::uint64_t>(q));
