@@ -762,7 +762,7 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
 // ChildKeys packs each child's ranking key (spec 8A.1 step 5, 8A.4's kappa,
 // 8.4's gap skipping the node itself) into one integer; order() and
 // symbol() must rank exactly as the keys compared one by one, up to the
-// magnitudes the spec allows (q = 21, 32 points, weight 15).
+// largest magnitudes inputs reach (q = 21, 32 points, weight 15).
 TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
   __extension__ typedef __int128 I128;
   // Spec 8A.1 "Reduction to B bits".
