@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x15"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x16"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -445,7 +445,7 @@ def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, q
 
 
 def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None, fit=None,
-                 paired=None, merge=False, tail=0):
+                 paired=None, merge=False, tail=0, wide=False):
     """§8A.1 conditional octree coder (planes = 2: coder 2, §8A.3, with the
     plane context; gap not None: coder 3, §8A.4, with that weight and planes
     1 or 2, or, a list of q weights, coder 4, §8A.5; fit not None: coder 5,
@@ -455,8 +455,11 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     whether the table sent at depth d for slot j = (class, plane context) is
     paired (§7.4). merge: each slot sends one table, at its first depth with
     symbols, which the deeper depths share. tail: the unused second symbol
-    of an odd paired sequence's last pair.
+    of an odd paired sequence's last pair. wide: coder 7, §8A.8, coder 6
+    with 5-bit weights (16: the far ranking).
     coarse: C in canonical order; added: A."""
+    if wide and paired is None:
+        paired = lambda d, j: False
     coarse = sorted(coarse)
     occ = [set() for _ in range(q + 1)]
     for (x, y, z) in coarse:
@@ -497,7 +500,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
             bw.put(fit, 4)
             bw.put(1 if isinstance(gap, list) else 0, 1)
         for g in (gap if isinstance(gap, list) else [gap or 0]):
-            bw.put(g, 4)
+            bw.put(g, 5 if wide else 4)
     coder = {}
     for j in slots:
         prev = None
@@ -553,7 +556,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
                 bw.put(0, 1)
     for (d, j, s) in seq:
         current[(d, j)].put(bw, s)
-    coder = 6 if paired is not None else 5 if fit is not None else 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
+    coder = 7 if wide else 6 if paired is not None else 5 if fit is not None else 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
     return bytes([coder]) + bw.bytes()
 
 
@@ -1138,9 +1141,10 @@ def hand_stream(kind, q, levels, refn_opts, rcons=None, origin=(0.0, 0.0, 0.0), 
         planes = refn_opts[i - 1][3] if len(refn_opts[i - 1]) > 3 else 1
         gap = refn_opts[i - 1][4] if len(refn_opts[i - 1]) > 4 else None
         fit = refn_opts[i - 1][5] if len(refn_opts[i - 1]) > 5 else None
-        paired, merge, tail = (tuple(refn_opts[i - 1][6:9]) + (None, False, 0)[len(refn_opts[i - 1][6:9]):])
+        paired, merge, tail, wide = (tuple(refn_opts[i - 1][6:10]) +
+                                     (None, False, 0, False)[len(refn_opts[i - 1][6:10]):])
         ch.append(["REFN", refn_payload(sorted(levels[i - 1]), added, q, nb, cl, share, planes=planes, gap=gap,
-                                        fit=fit, paired=paired, merge=merge, tail=tail)])
+                                        fit=fit, paired=paired, merge=merge, tail=tail, wide=wide)])
         if rcons:
             ch.append(["RCON", rcons[i]])
     ch.append(["HEND", b""])
@@ -1381,6 +1385,27 @@ def hb_refn_paired():
     return a, b, c
 
 
+def hb_refn_far():
+    # REFN coder 7 (far ranking, 5-bit weights). Random points filling a
+    # cube (a volume's interior), q = 8: neighbours 8, far ranking at some
+    # depths and gap weights 0-15 at others, plane contexts, 3 classes,
+    # tables paired at alternate depths; then one weight, 16, for every
+    # depth with the quadric through 10 neighbours (its heights break the
+    # ties), 2 classes; then neighbours 0 with weight 16 (no neighbour: g is
+    # 0 and the order is the child number's). On a lattice plus random points
+    # at q = 5: neighbours 4 and weight 16, where many children are equally
+    # far from their nearest neighbour (ties by t, e and child number).
+    lv = nested(rand_pts(600, 8, 121), [90, 250, 450, 600], 122)
+    a = hand_stream(0, 8, lv, [(8, 3, True, 2, [0, 16, 3, 16, 16, 15, 16, 0], 0, lambda d, j: (d + j[0]) % 2 == 0,
+                                False, 0, True),
+                               (4, 2, True, 1, 16, 10, None, False, 0, True),
+                               (0, 1, True, 1, 16, None, None, False, 0, True)])
+    lat = lattice_pts(6, 5, (1, 2, 3))
+    pts = sorted(set(lat) | set(rand_pts(120, 5, 123)))
+    b = hand_stream(0, 5, nested(pts, [60, len(pts)], 124), [(4, 2, False, 1, 16, None, None, False, 0, True)])
+    return a, b
+
+
 def hb_base_gaps():
     # BASE coder 2 (gap weights): an evenly spread sphere (a lattice's points
     # near a sphere), neighbours 10, weights 0 to 15 over the depths, plain
@@ -1603,6 +1628,10 @@ HANDBUILT = [
      "REFN coder 6 at q = 3: neighbours 0 with every table paired and shared across depths, many escaped pairs, an odd sequence whose unused last symbol is 5 (not the encoder's 0); neighbours 2 with G = 3, unshared tables", sec("refn", "huff")),
     ("refn-paired-single", lambda: hb_refn_paired()[2], P,
      "REFN coder 6 at q = 2 adding one point: each paired table's pair code is the one-symbol form, and the layer's symbols cost no bits", sec("refn", "huff")),
+    ("refn-far", lambda: hb_refn_far()[0], P,
+     "REFN coder 7 (far ranking) on random points filling a cube, q = 8: neighbours 8 with weight 16 at five depths and 0, 3, 15 at the others, plane contexts, 3 classes, alternate tables paired; weight 16 at every depth with the quadric through 10 neighbours breaking ties, 2 classes; neighbours 0 with weight 16 (g = 0: the order of the child numbers)", sec("refn", "huff")),
+    ("refn-far-lattice", lambda: hb_refn_far()[1], P,
+     "REFN coder 7 on lattice points plus random ones at q = 5: neighbours 4 and weight 16 at every depth, unshared tables, many children equally far from their nearest neighbour (ties by t, e, child number)", sec("refn", "huff")),
     ("base-gaps", lambda: hb_base_gaps()[0], P,
      "BASE coder 2 (gap weights): points near a sphere on a lattice (ties), neighbours 10, depth 0 plain, weights 15, 3 and 8 at the ranked depths, 3 contexts", sec("base", "huff")),
     ("base-gaps-neighbours-1", lambda: hb_base_gaps()[1], P,
@@ -1882,8 +1911,11 @@ NEGATIVE = [
      lambda: stream_q1(base_payload([(0, 0, 0)], 1) + b"\x00")),
     ("neg-base-overrun", "bad_layer", P, "the bit stream ends inside a code", ["7.3", "8.1", "13"],
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
-    ("neg-refn-coder", "bad_layer", P, "REFN coder 7", ["8A", "13"],
-     lambda: stream_q1_refn(b"\x07" + refn_single(0)[1:])),
+    ("neg-refn-coder", "bad_layer", P, "REFN coder 8", ["8A", "13"],
+     lambda: stream_q1_refn(b"\x08" + refn_single(0)[1:])),
+    ("neg-refn-far-weight", "bad_layer", P, "REFN coder 7 at q = 1 whose one weight is 17 (above 16)", ["8A.8", "13"],
+     lambda: stream_q1_refn(b"\x07" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(0, 1),
+                                                                 bw.put(17, 5), bw.put(1, 1), bw.put(0, 1), bw.put(1, 1), bw.put(1, 8))))),
     ("neg-refn-paired-cut", "bad_layer", P, "REFN coder 6 whose payload ends inside the escape code of a paired table (its pair code can give the escape)", ["7.4", "8A.7", "13"],
      lambda: stream_q1_refn(b"\x06" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(0, 1),
                                                                  bw.put(0, 4), bw.put(1, 1), bw.put(1, 1), bw.put(1, 1), bw.put(64, 7), bw.put(0, 1))))),

@@ -518,6 +518,7 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
     gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1. gap_from:
     the distances g skip the first gap_from neighbours (§8.3: the node itself).
     fit: coder 5's F (§8A.6), the points the quadric is fitted to.
+    gap 16: coder 7's far ranking (§8A.8), by g alone, farthest first.
     points: the neighbours themselves (§8.4), instead of a search in coarse;
     the first `fit` of them are the fit points."""
     X, Y, Z = node
@@ -574,7 +575,7 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
         # §8A.4: kappa = 32 t^2 - G k^2 N g, g the squared distance from U to
         # the nearest neighbour (0 without neighbours)
         g = min((sum((U[a] - p[a]) ** 2 for a in range(3)) for p in P[gap_from:]), default=0)
-        kappa = 32 * t * t - gap * k * k * N * g
+        kappa = -g if gap == 16 else 32 * t * t - gap * k * k * N * g  # §8A.8: far ranking
         keys.append((1 - (m >> c & 1), kappa, t, e, c))
     keys.sort()
     pi = [key[4] for key in keys]
@@ -588,7 +589,7 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
         return decode_vq(payload, q, coarse, n, codebook, form)
-    if payload[0] not in (0, 2, 3, 4, 5, 6):
+    if payload[0] not in (0, 2, 3, 4, 5, 6, 7):
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     planes = 2 if payload[0] == 2 else 1  # §8A.3: coder 2 adds the plane context
     br = BitReader(payload, 1, "bad_layer", "REFN")
@@ -596,20 +597,23 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
     classes = br.bits(2) + 1
     gaps = [0] * q
     fit = 0
-    if payload[0] in (3, 4, 5, 6):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
+    if payload[0] in (3, 4, 5, 6, 7):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
         planes = br.bits(1) + 1
-        if payload[0] in (5, 6):  # §8A.6, §8A.7: the quadric's fit points, then one weight or one per depth
+        if payload[0] in (5, 6, 7):  # §8A.6-§8A.8: the quadric's fit points, then one weight or one per depth
             fit = br.bits(4)
             per_depth = br.bits(1) == 1
         else:
             per_depth = payload[0] == 4
-        gaps = [br.bits(4) for _ in range(q)] if per_depth else [br.bits(4)] * q
+        width = 5 if payload[0] == 7 else 4  # §8A.8: 5-bit weights, 16 the far ranking
+        gaps = [br.bits(width) for _ in range(q)] if per_depth else [br.bits(width)] * q
+        if max(gaps) > 16:
+            raise DecodeError("bad_layer", "REFN: ranking weight %d above 16" % max(gaps))
     table = [[[None] * planes for _ in range(classes)] for _ in range(q)]
     for d in range(q):
         for j in range(classes):
             for x in range(planes):
                 if br.bits(1) == 1:
-                    table[d][j][x] = read_table(br, 255, form, payload[0] == 6)
+                    table[d][j][x] = read_table(br, 255, form, payload[0] in (6, 7))
                 elif d > 0:
                     table[d][j][x] = table[d - 1][j][x]
     # Occupied nodes of C per depth.

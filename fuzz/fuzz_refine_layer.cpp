@@ -4,9 +4,10 @@
 //
 // Input: u8 q (mapped to 1..21), u8 coarse count c (1..64), c points of
 // 3 x u24 (masked to the grid), u16 added count n (1..4096), u8 coder (its
-// value mod 6: 0 coder 0, 1 coder 2 with plane contexts, 2 coder 3 with plane
+// value mod 7: 0 coder 0, 1 coder 2 with plane contexts, 2 coder 3 with plane
 // contexts and gap ranking, 3 coder 4 with a gap weight per depth, 4 coder 5
-// with quadric ranking, 5 coder 6 with paired tables), then the REFN bit
+// with quadric ranking, 5 coder 6 with paired tables, 6 coder 7 with far
+// ranking), then the REFN bit
 // stream (without its coder byte). Checks: only bad_layer /
 // bad_huffman_table are raised; a decoded layer has exactly n distinct new
 // points on the grid, none in the coarser level, in canonical order; coding
@@ -24,10 +25,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   int q = 0;
   const std::vector<hmc::GridPoint> coarse = hmc_fuzz::read_coarse_level(params, q);
   const std::uint64_t n = 1 + params.u16() % 4096;
-  const hmc::detail::OctreeCoder coder = std::array<hmc::detail::OctreeCoder, 6>{
+  const hmc::detail::OctreeCoder coder = std::array<hmc::detail::OctreeCoder, 7>{
       hmc::detail::OctreeCoder::plain,      hmc::detail::OctreeCoder::planes,  hmc::detail::OctreeCoder::gap,
-      hmc::detail::OctreeCoder::depth_gaps, hmc::detail::OctreeCoder::quadric, hmc::detail::OctreeCoder::paired}
-      [params.u8() % 6];
+      hmc::detail::OctreeCoder::depth_gaps, hmc::detail::OctreeCoder::quadric, hmc::detail::OctreeCoder::paired,
+      hmc::detail::OctreeCoder::far}[params.u8() % 7];
 
   std::vector<hmc::GridPoint> added;
   try {

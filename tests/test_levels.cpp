@@ -269,7 +269,7 @@ TEST_CASE("stream structure errors around refinement layers") {
   c.insert(c.end() - 1, c[refn + 1]);
   CHECK(status(c) == Status::bad_chunk);
   c = chunks;
-  c[refn].second[0] = 7;  // unknown refinement coder
+  c[refn].second[0] = 8;  // unknown refinement coder
   CHECK(status(c) == Status::bad_layer);
   c = chunks;
   c[refn].second.push_back(0);  // trailing byte in the layer

@@ -666,7 +666,7 @@ TEST_CASE("malformed lossy streams") {
   }
   SUBCASE("unknown refinement coder") {
     const auto s = rebuild(e.bytes, [](ChunkType& t, std::vector<std::uint8_t>& p) {
-      if (t == kRefinement) p[0] = 7;  // 0 to 6 are coders
+      if (t == kRefinement) p[0] = 8;  // 0 to 7 are coders
       return true;
     });
     CHECK(decode_status(s) == Status::bad_layer);

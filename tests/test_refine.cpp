@@ -762,7 +762,8 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
 // ChildKeys packs each child's ranking key (spec 8A.1 step 5, 8A.4's kappa,
 // 8.4's gap skipping the node itself) into one integer; order() and
 // symbol() must rank exactly as the keys compared one by one, up to the
-// largest magnitudes inputs reach (q = 21, 32 points, weight 15).
+// largest magnitudes inputs reach (q = 21, 32 points, weight 15); so must
+// the far ranking (spec 8A.8, weight kFarRanking) by (mask, -g, t, e, c).
 TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
   __extension__ typedef __int128 I128;
   // Spec 8A.1 "Reduction to B bits".
@@ -776,7 +777,7 @@ TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
     return v;
   };
   std::mt19937_64 rng(11);
-  int cases = 0, gapped_cases = 0;
+  int cases = 0, gapped_cases = 0, far_decided = 0;
   I128 lowest = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     // Every seventh node at the origin with its neighbours far away: gap
@@ -831,7 +832,7 @@ TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
     const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
     const bool gapped = gap > 0 && n2 > 0 && gap_from < k;
     gapped_cases += gapped;
-    std::array<std::tuple<int, I128, std::int64_t, std::int64_t, int>, 8> key;
+    std::array<std::tuple<int, I128, std::int64_t, std::int64_t, int>, 8> key, far_key;
     for (int c = 0; c < 8; ++c) {
       std::int64_t u[3], t = 0, e = 0, g = INT64_MAX;
       for (std::size_t a = 0; a < 3; ++a) {
@@ -851,6 +852,7 @@ TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
       t = t < 0 ? -t : t;
       const I128 kappa = gapped ? 32 * I128{t} * t - I128{gap} * k * k * n2 * g : 0;
       key[static_cast<std::size_t>(c)] = {(mask >> c) & 1u ? 0 : 1, kappa, t, e, c};
+      far_key[static_cast<std::size_t>(c)] = {(mask >> c) & 1u ? 0 : 1, gap_from < k ? -I128{g} : 0, t, e, c};
       if (kappa < lowest) lowest = kappa;
     }
     std::array<int, 8> want{}, got{};
@@ -862,10 +864,19 @@ TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
     CHECK(got == want);
     const unsigned occupancy = 1u + static_cast<unsigned>(rng() % 255);
     CHECK(keys.symbol(mask, gap, occupancy) == ranked_symbol(want, occupancy));
+    std::iota(want.begin(), want.end(), 0);
+    std::sort(want.begin(), want.end(), [&](int a, int b) {
+      return far_key[static_cast<std::size_t>(a)] < far_key[static_cast<std::size_t>(b)];
+    });
+    keys.order(mask, kFarRanking, got);
+    CHECK(got == want);
+    CHECK(keys.symbol(mask, kFarRanking, occupancy) == ranked_symbol(want, occupancy));
+    far_decided += want != std::array<int, 8>{0, 1, 2, 3, 4, 5, 6, 7} && std::get<1>(far_key[0]) != 0;
     ++cases;
   }
   CHECK(cases == 3000);
   CHECK(gapped_cases > 1000);  // the gap term decides many of them
+  CHECK(far_decided > 1000);   // and the far ranking reorders most
   CHECK(lowest < -(I128{1} << 100));  // near the largest magnitudes any input reaches
 }
 
@@ -1223,4 +1234,116 @@ TEST_CASE("coder 6 (paired tables) round trips with every ranking, and the encod
   // table pays for pairing, and the encoder keeps its coder.
   const Split ball = split_by(quantize(samples::random_ball(3000, 7), q), [](std::size_t i) { return i % 4 == 0; });
   CHECK(encode_refinement_layer(ball.coarse, ball.added, q).coder != 6);
+}
+
+namespace {
+
+// The header fields of a coder 7 layer (spec 8A.8): the weights have 5 bits.
+RefinementParams far_params(const std::vector<std::uint8_t>& bytes, int q) {
+  RefinementParams p =
+      params(static_cast<int>(header_field(bytes, 0, 4)), static_cast<int>(header_field(bytes, 4, 2)) + 1);
+  p.plane_contexts = header_field(bytes, 6, 1) == 1;
+  p.fit = static_cast<int>(header_field(bytes, 7, 4));
+  if (header_field(bytes, 11, 1) == 0) p.gap = static_cast<int>(header_field(bytes, 12, 5));
+  else
+    for (std::size_t d = 0; d < static_cast<std::size_t>(q); ++d)
+      p.depth_gaps.push_back(static_cast<int>(header_field(bytes, 12 + 5 * d, 5)));
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("coder 7 (far ranking) round trips, and wins where added points fill the holes of a volume") {
+  const int q = 12;
+  // A jittered lattice filling a cube, turned against the grid's axes, its
+  // points of even indices added: every neighbour of an added point is
+  // coarse, so each added point fills a hole between coarse points, and no
+  // surface passes through them.
+  std::mt19937_64 rng(9);
+  const double ca = std::cos(0.5), sa = std::sin(0.5), cb = std::cos(0.3), sb = std::sin(0.3);
+  Points all;
+  std::vector<char> even;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j)
+      for (int k = 0; k < 12; ++k) {
+        const double x = 200.0 * (i - 5.5), y = 200.0 * (j - 5.5), z = 200.0 * (k - 5.5);
+        const double x1 = ca * x - sa * y, y1 = sa * x + ca * y;           // about z
+        const double y2 = cb * y1 - sb * z, z2 = sb * y1 + cb * z;         // about x
+        const double u[3] = {x1, y2, z2};
+        GridPoint p{};
+        for (std::size_t a = 0; a < 3; ++a)
+          p[a] = static_cast<std::uint32_t>(2048.0 + u[a] + static_cast<double>(rng() % 41) - 20.0);
+        all.push_back(p);
+        even.push_back(i % 2 == 0 && j % 2 == 0 && k % 2 == 0);
+      }
+  const Split s = split_by(all, [&](std::size_t i) { return even[i] != 0; });
+  // Forced: far ranking at every depth, and mixed with gap weights, plane
+  // contexts, the quadric; read as coder 6 (4-bit weights), misread.
+  for (int k : {0, 1, 4, 8})
+    for (int fit : {0, 10}) {
+      CAPTURE(k);
+      CAPTURE(fit);
+      RefinementParams p = params(k, 2);
+      p.fit = fit;
+      p.gap = kFarRanking;
+      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::far, OctreeCoder::paired);
+      p.gap = 0;
+      p.plane_contexts = true;
+      p.depth_gaps = {0, 3, 16, 0, 16, 15, 16, 16, 1, 16, 16, 16};
+      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::far, OctreeCoder::paired);
+    }
+  // The encoder's choice: coder 7, far ranking at the depths below the
+  // coarse spacing. Its header, forced, gives a layer of about its size;
+  // with weight 0 at those depths (the ranking of coder 6) a larger one.
+  const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
+  REQUIRE(layer.coder == 7);
+  CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
+                          OctreeCoder::far) == sorted(s.added));
+  RefinementParams p = far_params(layer.bytes, q);
+  p.paired = true;
+  const std::size_t far = encode_refinement(s.coarse, s.added, q, p).size();
+  CHECK(far <= layer.bytes.size() + 1);  // the forced path pairs tables that save less than a byte
+  std::vector<int> gaps = p.depth_gaps.empty() ? std::vector<int>(q, p.gap) : p.depth_gaps;
+  CHECK(std::count(gaps.begin(), gaps.end(), kFarRanking) >= 3);
+  for (int& g : gaps)
+    if (g == kFarRanking) g = 0;
+  p.gap = 0;
+  p.depth_gaps = gaps;
+  const std::size_t near_first = encode_refinement(s.coarse, s.added, q, p).size();
+  MESSAGE("far ranking: ", layer.bytes.size(), " bytes (forced ", far, "); without it at those depths: ", near_first);
+  CHECK(100 * far < 95 * near_first);
+}
+
+TEST_CASE("coder 7: weight 16 ranks farthest first, and a weight above 16 is bad_layer") {
+  // q = 1, one coarse point at the origin (child 0), one added point sent as
+  // the child of rank 7. Weight 0 (the ranking of 8A.1 with one neighbour):
+  // child 0 (coarse), then by distance to the neighbour, nearest first, so
+  // rank 7 is child 7. Weight 16: child 0, then farthest first (7; 3, 5, 6;
+  // 1, 2, 4, ties by child number), so rank 7 is child 4.
+  for (std::uint32_t weight : {0u, 16u, 17u, 31u}) {
+    CAPTURE(weight);
+    BitWriter w;
+    w.put(1, 4);       // neighbours
+    w.put(0, 2);       // classes - 1
+    w.put(0, 1);       // planes - 1
+    w.put(0, 4);       // fit
+    w.put(0, 1);       // one weight for every depth
+    w.put(weight, 5);  // the weight
+    w.put(1, 1);       // depth 0's table: sent,
+    w.put(0, 1);       // not paired,
+    w.put(1, 1);       // the one-symbol form:
+    w.put(7, 8);       // symbol 7, the child of rank 7 alone
+    const auto bytes = w.finish();
+    const Points coarse{{0, 0, 0}};
+    Points got;
+    const Status st = status_of([&] {
+      got = decode_refinement(bytes.data(), bytes.size(), 1, coarse, 1, TableForm::deltas, OctreeCoder::far);
+    });
+    if (weight > 16) {
+      CHECK(st == Status::bad_layer);
+    } else {
+      REQUIRE(st == Status::ok);
+      CHECK(got == (weight == 16 ? Points{{1, 0, 0}} : Points{{1, 1, 1}}));
+    }
+  }
 }

@@ -156,8 +156,9 @@ struct LevelReport {
   /// Refinement coder of this level's layer: 0 conditional octree (exact),
   /// 1 anchored vector quantizer (EncodeOptions::vq_bits), 2 conditional
   /// octree with plane contexts (exact), 3 the same with gap ranking (exact),
-  /// 4 with a gap weight per depth (exact), 5 with quadric ranking (exact);
-  /// 0 for the base.
+  /// 4 with a gap weight per depth (exact), 5 with quadric ranking (exact),
+  /// 6 coder 5 with paired tables (exact), 7 coder 6 with far ranking
+  /// (exact); 0 for the base.
   int coder = 0;
   // Encoder only, coder 1: distances (grid units) of the decoded added
   // points from the input's, and input points the layer could not place.

@@ -252,7 +252,8 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
         const auto coder = static_cast<RefineCoder>(c.payload[0]);
         if (coder == RefineCoder::conditional_octree || coder == RefineCoder::conditional_octree_planes ||
             coder == RefineCoder::conditional_octree_gap || coder == RefineCoder::conditional_octree_depth_gaps ||
-            coder == RefineCoder::conditional_octree_quadric || coder == RefineCoder::conditional_octree_paired) {
+            coder == RefineCoder::conditional_octree_quadric || coder == RefineCoder::conditional_octree_paired ||
+            coder == RefineCoder::conditional_octree_far) {
           added = decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, n, walk.header->tables,
                                     static_cast<OctreeCoder>(coder));
         } else if (coder == RefineCoder::anchored_vq) {

@@ -58,9 +58,10 @@ constexpr std::uint32_t kMaxClasses = 64;
 constexpr std::uint32_t kMaxScaleRank = 64;
 
 /// Refinement-layer coders (first byte of REFN).
-/// REFN coders (spec 8A): 0, 2, 3, 4, 5 and 6 exact (2 adds plane contexts,
-/// 3 also the gap ranking, 4 with a gap weight per depth, 5 the quadric
-/// ranking, 6 coder 5 with paired tables), 1 lossy.
+/// REFN coders (spec 8A): 0, 2, 3, 4, 5, 6 and 7 exact (2 adds plane
+/// contexts, 3 also the gap ranking, 4 with a gap weight per depth, 5 the
+/// quadric ranking, 6 coder 5 with paired tables, 7 coder 6 with far
+/// ranking), 1 lossy.
 enum class RefineCoder : std::uint8_t {
   conditional_octree = 0,
   anchored_vq = 1,
@@ -68,7 +69,8 @@ enum class RefineCoder : std::uint8_t {
   conditional_octree_gap = 3,
   conditional_octree_depth_gaps = 4,
   conditional_octree_quadric = 5,
-  conditional_octree_paired = 6
+  conditional_octree_paired = 6,
+  conditional_octree_far = 7
 };
 
 }  // namespace hmc::detail

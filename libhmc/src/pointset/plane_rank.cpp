@@ -206,12 +206,10 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   // kappa_c, then the place by (t, e, c)): kappa_c + 2^106 from bit 3, the
   // place in bits 0-2, the mask in bit 112; here base_c = that integer for
   // G = 0 and step_c = its decrease per unit of G.
-  const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  if (!with_gaps || n2 == 0 || gap_from >= k) return;
-  gapped_ = true;
-  const std::int64_t weight = std::int64_t{k} * k * n2;
-  for (std::size_t c = 0; c < 8; ++c) {
-    std::int64_t g = INT64_MAX;
+  if (!with_gaps) return;
+  std::array<std::int64_t, 8> g{};  // 0 without neighbours beyond gap_from
+  for (std::size_t c = 0; c < 8 && gap_from < k; ++c) {
+    g[c] = INT64_MAX;
     for (int i = gap_from; i < k; ++i) {
       std::int64_t d2 = 0;
       for (std::size_t a = 0; a < 3; ++a) {
@@ -219,17 +217,29 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
         const std::int64_t u = (2 * std::int64_t{p[a]} + bit) * h + h / 2 - neighbours[i][a];
         d2 += u * u;
       }
-      g = std::min(g, d2);
+      g[c] = std::min(g[c], d2);
     }
+  }
+  // Far ranking (spec 8A.8): the larger g_c first, then the place by (t, e,
+  // c): 2^47 - g_c (g_c < 3 * 2^44) from bit 3, the place in bits 0-2.
+  for (std::size_t c = 0; c < 8; ++c)
+    far_[c] = ((std::uint64_t{1} << 47) - static_cast<std::uint64_t>(g[c])) << 3 | tie_[c];
+  const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  if (n2 == 0 || gap_from >= k) return;
+  gapped_ = true;
+  const std::int64_t weight = std::int64_t{k} * k * n2;
+  for (std::size_t c = 0; c < 8; ++c) {
     base_[c] = (static_cast<UInt128>(32 * static_cast<Int128>(t[c]) * t[c] + (Int128{1} << 106)) << 3) + tie_[c];
-    step_[c] = static_cast<UInt128>(static_cast<Int128>(weight) * g) << 3;
+    step_[c] = static_cast<UInt128>(static_cast<Int128>(weight) * g[c]) << 3;
   }
 }
 
 // The sort key of child c (see the constructor), distinct for each child.
 ChildKeys::UInt128 ChildKeys::key(unsigned first_mask, int gap, std::size_t c) const {
   return (((first_mask >> c) & 1u) ? 0 : UInt128{1} << 112) +
-         (gap > 0 && gapped_ ? base_[c] - static_cast<UInt128>(gap) * step_[c] : tie_[c]);
+         (gap == kFarRanking        ? UInt128{far_[c]}
+          : gap > 0 && gapped_      ? base_[c] - static_cast<UInt128>(gap) * step_[c]
+                                    : UInt128{tie_[c]});
 }
 
 void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) const {

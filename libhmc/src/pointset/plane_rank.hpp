@@ -49,6 +49,11 @@ using Doubled = std::array<std::int32_t, 3>;
 /// coder's causal points (spec 8.4), above the refinement coders' 15.
 inline constexpr int kMaxRankPoints = 32;
 
+/// The ranking weight that stands for far ranking (spec 8A.8, REFN coder 7):
+/// children farthest from the nearest neighbour first, the plane (or
+/// quadric) and centroid distances only breaking ties.
+inline constexpr int kFarRanking = 16;
+
 /// The keys that rank a node's children (spec 8A.1 steps 2–4, and 8A.4's
 /// distances to the nearest neighbour when `with_gaps`), computed once so
 /// that the encoder can rank the children for several gap weights.
@@ -66,7 +71,8 @@ class ChildKeys {
   /// How many children lie on the smaller side of the fitted plane (0 to 4).
   int split() const { return split_; }
   /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;
-  /// above 0 only when constructed `with_gaps`).
+  /// above 0 only when constructed `with_gaps`), or, for gap = kFarRanking
+  /// (only when constructed `with_gaps`), the far ranking of spec 8A.8.
   void order(unsigned first_mask, int gap, std::array<int, 8>& order) const;
   /// ranked_symbol() of `occupancy` (not 0) under that ranking, without
   /// sorting: the encoders' trials of several weights.
@@ -78,6 +84,7 @@ class ChildKeys {
   std::array<std::uint8_t, 8> tie_{};  // each child's place by (t, e, child number)
   bool gapped_ = false;                // a gap weight changes the order (k^2 |n|^2 > 0)
   std::array<UInt128, 8> base_{}, step_{};  // the sort keys (constructor)
+  std::array<std::uint64_t, 8> far_{};      // the far ranking's keys (constructor)
   int split_ = 0;
 };
 

@@ -20,8 +20,10 @@ namespace {
 
 constexpr int kMaxNeighbours = 15;        // 4-bit header field
 constexpr int kQuadricNeighbours = 10;    // the encoder's quadric fit (coder 5)
+constexpr int kFarNeighbours = 8;         // the encoder's second try of far ranking (coder 7)
 constexpr int kMaxClasses = 4;            // 2-bit header field
 constexpr int kMaxGap = 15;               // 4-bit header field of coder 3
+constexpr int kFarWeightBits = 5;         // coder 7's weight fields: 0-15 and kFarRanking
 constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
 const char* const kWhat = "refinement layer";
 
@@ -364,6 +366,11 @@ struct TablePlan {
   std::uint64_t bits = 0;                        // header, tables and symbols
 };
 
+// Whether some depth ranks far from the neighbours (coder 7).
+bool any_far(const std::vector<int>& gaps) {
+  return std::any_of(gaps.begin(), gaps.end(), [](int g) { return g == kFarRanking; });
+}
+
 // Whether the depths' gap weights differ (coder 4, or coder 5's per-depth form).
 bool per_depth(const std::vector<int>& gaps) {
   return std::any_of(gaps.begin(), gaps.end(), [&](int g) { return g != gaps[0]; });
@@ -371,6 +378,7 @@ bool per_depth(const std::vector<int>& gaps) {
 
 // The coder of a plan, from its quadric and gap weights.
 OctreeCoder coder_of(const TablePlan& p) {
+  if (any_far(p.gaps)) return OctreeCoder::far;
   if (!p.paired.empty()) return OctreeCoder::paired;
   if (p.fit > 0) return OctreeCoder::quadric;
   if (std::all_of(p.gaps.begin(), p.gaps.end(), [](int g) { return g == 0; }))
@@ -391,13 +399,16 @@ TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes
   plan.fresh.assign(slots, false);
   plan.table.assign(slots, -1);
   // Header fields (neighbours, classes; coders 3 and 4: planes and the
-  // weights; coder 5: planes, fit, and one weight or one per depth), then
-  // one flag per slot.
+  // weights; coder 5: planes, fit, and one weight or one per depth; coder 7:
+  // the same with 5-bit weights), then one flag per slot (and, coder 7, one
+  // per table: added at the end).
   const OctreeCoder coder = coder_of(plan);
+  const int width = coder == OctreeCoder::far ? kFarWeightBits : 4;
   plan.bits = 6 + slots + (coder == OctreeCoder::gap          ? 5
                            : coder == OctreeCoder::depth_gaps ? 1 + 4 * q
-                           : coder == OctreeCoder::quadric    ? 6 + (per_depth(gaps) ? 4 * q : 4)
-                                                              : 0);
+                           : coder == OctreeCoder::quadric || coder == OctreeCoder::far
+                               ? 6 + static_cast<std::uint64_t>(per_depth(gaps) ? width * q : width)
+                               : 0);
   std::vector<std::uint64_t> f(kAlphabet);
   for (int k = 0; k < classes; ++k)
     for (int x = 0; x < planes; ++x) {
@@ -440,6 +451,7 @@ TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes
       }
       if (current >= 0) plan.bits += current_bits;
     }
+  if (coder == OctreeCoder::far) plan.bits += plan.freq.size();
   return plan;
 }
 
@@ -466,7 +478,7 @@ bool pair_tables(const std::vector<Symbol>& symbols, TablePlan& plan, bool force
   // Coder 6's header is coder 5's (the fields of coders 3 to 5 that the
   // plan lacks are written as zeros), plus a flag per table.
   const OctreeCoder coder = coder_of(plan);
-  std::uint64_t bits = plan.bits + plan.freq.size();
+  std::uint64_t bits = plan.bits + (coder == OctreeCoder::far ? 0 : plan.freq.size());  // coder 7 has its flags
   if (coder == OctreeCoder::plain || coder == OctreeCoder::planes) bits += 1 + 4 + 1 + 4;  // planes, F, flag, G
   else if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps) bits += 4 + 1;    // F, flag
   bool any = false;
@@ -485,30 +497,31 @@ bool pair_tables(const std::vector<Symbol>& symbols, TablePlan& plan, bool force
 }
 
 std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const TablePlan& plan, int neighbours) {
-  const bool paired = !plan.paired.empty();
+  const OctreeCoder coder = coder_of(plan);
+  // Coders 6 and 7 send a flag per table; without a pairing plan, all 0.
+  const bool flagged = coder == OctreeCoder::paired || coder == OctreeCoder::far;
   auto seqs = sequences(symbols, plan);
   std::vector<TableCode> codes;
   for (std::size_t t = 0; t < seqs.size(); ++t)
-    codes.push_back(TableCode::build(std::move(seqs[t]), kAlphabet, paired && plan.paired[t]));
+    codes.push_back(TableCode::build(std::move(seqs[t]), kAlphabet, !plan.paired.empty() && plan.paired[t]));
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
-  const OctreeCoder coder = coder_of(plan);
-  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric ||
-      coder == OctreeCoder::paired) {
+  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric || flagged) {
     w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
     const bool varies = per_depth(plan.gaps);
-    if (coder == OctreeCoder::quadric || coder == OctreeCoder::paired) {
+    if (coder == OctreeCoder::quadric || flagged) {
       w.put(static_cast<std::uint32_t>(plan.fit), 4);
       w.put(varies ? 1u : 0u, 1);
     }
-    if (!varies) w.put(static_cast<std::uint32_t>(plan.gaps[0]), 4);
+    const int width = coder == OctreeCoder::far ? kFarWeightBits : 4;
+    if (!varies) w.put(static_cast<std::uint32_t>(plan.gaps[0]), width);
     else
-      for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), 4);
+      for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), width);
   }
   for (std::size_t slot = 0; slot < plan.fresh.size(); ++slot) {
     w.put(plan.fresh[slot] ? 1u : 0u, 1);
-    if (plan.fresh[slot]) codes[static_cast<std::size_t>(plan.table[slot])].write(w, paired, TableForm::deltas);
+    if (plan.fresh[slot]) codes[static_cast<std::size_t>(plan.table[slot])].write(w, flagged, TableForm::deltas);
   }
   for (const Symbol& s : symbols) codes[static_cast<std::size_t>(table_of(s, plan))].encode(w, s.index);
   return w.finish();
@@ -531,11 +544,12 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   if (added_in.size() >= (std::size_t{1} << 32) - 1)
     fail(Status::invalid_argument, std::string(kWhat) + ": too many added points");
   if (forced && (forced->neighbours < 0 || forced->neighbours > kMaxNeighbours || forced->classes < 1 ||
-                 forced->classes > kMaxClasses || forced->gap < 0 || forced->gap > kMaxGap || forced->fit < 0 ||
+                 forced->classes > kMaxClasses || forced->gap < 0 ||
+                 (forced->gap > kMaxGap && forced->gap != kFarRanking) || forced->fit < 0 ||
                  forced->fit > kMaxNeighbours ||
                  (!forced->depth_gaps.empty() && forced->depth_gaps.size() != static_cast<std::size_t>(q)) ||
                  std::any_of(forced->depth_gaps.begin(), forced->depth_gaps.end(),
-                             [](int g) { return g < 0 || g > kMaxGap; })))
+                             [](int g) { return g < 0 || (g > kMaxGap && g != kFarRanking); })))
     fail(Status::invalid_argument, std::string(kWhat) + ": parameters out of range");
   if (added_in.empty()) {
     if (!forced) return {static_cast<std::uint8_t>(OctreeCoder::plain), {}};
@@ -604,9 +618,12 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
       TablePlan p = plan_of(traversal.counts[j], std::vector<int>(static_cast<std::size_t>(q), others[j]), fit);
       if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
     }
-    if (!others.empty()) {
-      // Each depth's weight: the one whose symbols have the least entropy in
-      // that depth's contexts (w, x) (table costs aside; the plan decides).
+    // Each depth's weight: the one whose symbols have the least entropy in
+    // that depth's contexts (w, x) (table costs aside; the plan decides),
+    // among the gap weights, then also with far ranking (coder 7, whose
+    // header costs more: a mix with it must not displace the mix without).
+    for (const bool far : {false, true}) {
+      if (others.empty() || (far && !any_far(others))) continue;
       std::vector<int> mixed(static_cast<std::size_t>(q), 0);
       std::vector<std::uint64_t> mixed_freq = freq;
       for (int d = 0; d < q; ++d) {
@@ -617,13 +634,15 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
           return bits;
         };
         double least = cost(freq);
-        for (std::size_t j = 0; j < others.size(); ++j)
+        for (std::size_t j = 0; j < others.size(); ++j) {
+          if (!far && others[j] == kFarRanking) continue;
           if (const double c = cost(traversal.counts[j]); c < least) {
             least = c;
             mixed[static_cast<std::size_t>(d)] = others[j];
             std::copy_n(traversal.counts[j].begin() + static_cast<std::ptrdiff_t>(at), depth_rows,
                         mixed_freq.begin() + static_cast<std::ptrdiff_t>(at));
           }
+        }
       }
       TablePlan p = plan_of(mixed_freq, mixed, fit);
       if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
@@ -648,9 +667,13 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     // coder 3's and 4's gap weights 1 to 12 are tried too, and then coder 5's
     // quadric through 10 neighbours, with the same weights.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
-    const std::vector<int> weights{1, 2, 3, 4, 6, 8, 12};
+    const std::vector<int> weights{1, 2, 3, 4, 6, 8, 12, kFarRanking};
     trial(neighbours, 0, none, all_coders && neighbours >= 2 ? weights : std::vector<int>{});
     if (all_coders && coarse.size() >= 6) trial(neighbours, kQuadricNeighbours, none, weights);
+    // Where far ranking won (volume interiors: added points sit in the holes
+    // between coarse points), the nearest of more neighbours marks the
+    // holes better.
+    if (all_coders && coder_of(best->plan) == OctreeCoder::far) trial(kFarNeighbours, 0, none, weights);
     if (neighbours != 1) trial(1, 0, none, {});
   }
   if (forced && forced->paired) {
@@ -685,14 +708,19 @@ class Decoder {
     classes_ = static_cast<int>(in.get(2)) + 1;
     std::vector<int> gaps(static_cast<std::size_t>(q), 0);
     int fit = 0;
-    const bool quadric = coder == OctreeCoder::quadric || coder == OctreeCoder::paired;
+    const bool flagged = coder == OctreeCoder::paired || coder == OctreeCoder::far;
+    const bool quadric = coder == OctreeCoder::quadric || flagged;
     if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || quadric) {
       planes_ = static_cast<int>(in.get(1)) + 1;
       if (quadric) fit = static_cast<int>(in.get(4));
       const bool varies = coder == OctreeCoder::depth_gaps || (quadric && in.get(1) != 0);
-      if (!varies) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(4)));
+      const int width = coder == OctreeCoder::far ? kFarWeightBits : 4;
+      if (!varies) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(width)));
       else
-        for (int& g : gaps) g = static_cast<int>(in.get(4));
+        for (int& g : gaps) g = static_cast<int>(in.get(width));
+      for (int g : gaps)
+        if (g > kFarRanking)
+          fail(Status::bad_layer, std::string(kWhat) + ": ranking weight " + std::to_string(g) + " is not 0-16");
     }
     const int per_depth = classes_ * planes_;
     table_.assign(static_cast<std::size_t>(q * per_depth), -1);
@@ -701,7 +729,7 @@ class Decoder {
         for (int x = 0; x < planes_; ++x) {
           const auto slot = static_cast<std::size_t>((d * classes_ + k) * planes_ + x);
           if (in.get(1)) {
-            codes_.push_back(TableCode::read(in, kAlphabet, coder == OctreeCoder::paired, slot_name(d, k, x), form));
+            codes_.push_back(TableCode::read(in, kAlphabet, flagged, slot_name(d, k, x), form));
             table_[slot] = static_cast<int>(codes_.size() - 1);
           } else if (d > 0) {
             table_[slot] = table_[slot - static_cast<std::size_t>(per_depth)];

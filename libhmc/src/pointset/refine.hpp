@@ -17,16 +17,19 @@ namespace hmc::detail {
 
 /// The exact REFN coders (spec 8A): the conditional octree (0), with plane
 /// contexts (2), with plane contexts and gap ranking (3), with a gap weight
-/// per depth (4), with quadric ranking (5),
-/// and coder 5 with paired tables (6).
-enum class OctreeCoder : std::uint8_t { plain = 0, planes = 2, gap = 3, depth_gaps = 4, quadric = 5, paired = 6 };
+/// per depth (4), with quadric ranking (5), coder 5 with paired tables (6),
+/// and coder 6 with far ranking (7).
+enum class OctreeCoder : std::uint8_t {
+  plain = 0, planes = 2, gap = 3, depth_gaps = 4, quadric = 5, paired = 6, far = 7
+};
 
 /// The header fields of a refinement layer: the number of coarse neighbours
 /// that predict where added points lie (0 to 15; 0 disables the prediction),
 /// the number of context classes (1 to 4), the plane contexts and the gap
-/// weights, and the quadric's neighbours. The coder follows from them: 5 with
-/// a quadric, else 4 when the depths' weights differ, 3 when they are equal
-/// and above 0, else 2 with plane contexts, else 0.
+/// weights, and the quadric's neighbours. The coder follows from them: 7 with
+/// a far-ranked depth, 6 with paired tables, 5 with a quadric, else 4 when
+/// the depths' weights differ, 3 when they are equal and above 0, else 2
+/// with plane contexts, else 0.
 struct RefinementParams {
   int neighbours = 4;
   int classes = 4;
@@ -37,7 +40,9 @@ struct RefinementParams {
   /// nearest neighbour moves it up the ranking (0: not at all, coders 0, 2).
   int gap = 0;
   /// Coder 4 (spec 8A.5): when not empty, q weights (0 to 15), one per
-  /// depth, in place of `gap`.
+  /// depth, in place of `gap`. Coder 7 (spec 8A.8): a weight may also be
+  /// kFarRanking (16), which ranks that depth's children farthest from the
+  /// nearest neighbour first.
   std::vector<int> depth_gaps;
   /// Coder 5 (spec 8A.6) when above 0, to 15: the children are ranked by
   /// their distance from the quadric fitted to this many nearest coarse
@@ -49,7 +54,7 @@ struct RefinementParams {
 };
 
 /// A refinement layer as the encoder writes it: the REFN coder number (0,
-/// 2, 3, 4, 5 or 6, an OctreeCoder) and its bits.
+/// 2, 3, 4, 5, 6 or 7, an OctreeCoder) and its bits.
 struct RefinementLayer {
   std::uint8_t coder = 0;
   std::vector<std::uint8_t> bytes;
@@ -68,7 +73,7 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params);
 
-/// What the encoder writes: coder 0, 2, 3, 4, 5 or 6, whichever is smallest;
+/// What the encoder writes: coder 0, 2, 3, 4, 5, 6 or 7, whichever is smallest;
 /// with `fast`, the smallest without neighbours (no search while decoding).
 RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                         int q, bool fast = false);
