@@ -20,7 +20,7 @@ const char* refinement_coder_name(int coder) {
     case 4: return "conditional octree, gap ranking per depth";
     case 5: return "conditional octree, quadric ranking";
     case 6: return "conditional octree, quadric ranking, paired tables";
-    case 7: return "conditional octree, far ranking, paired tables";
+    case 7: return "conditional octree, far ranking";
     default: return "unknown";
   }
 }
