@@ -206,9 +206,10 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   // kappa_c, then the place by (t, e, c)): kappa_c + 2^106 from bit 3, the
   // place in bits 0-2, the mask in bit 112; here base_c = that integer for
   // G = 0 and step_c = its decrease per unit of G.
-  if (!with_gaps) return;
+  // Without `with_gaps` no ranking uses g_c: left 0, the far keys order as
+  // (t, e, c), the ranking of spec 8A.8 without neighbours.
   std::array<std::int64_t, 8> g{};  // 0 without neighbours beyond gap_from
-  for (std::size_t c = 0; c < 8 && gap_from < k; ++c) {
+  for (std::size_t c = 0; c < 8 && with_gaps && gap_from < k; ++c) {
     g[c] = INT64_MAX;
     for (int i = gap_from; i < k; ++i) {
       std::int64_t d2 = 0;
@@ -225,7 +226,7 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   for (std::size_t c = 0; c < 8; ++c)
     far_[c] = ((std::uint64_t{1} << 47) - static_cast<std::uint64_t>(g[c])) << 3 | tie_[c];
   const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  if (n2 == 0 || gap_from >= k) return;
+  if (!with_gaps || n2 == 0 || gap_from >= k) return;
   gapped_ = true;
   const std::int64_t weight = std::int64_t{k} * k * n2;
   for (std::size_t c = 0; c < 8; ++c) {

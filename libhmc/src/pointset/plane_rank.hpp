@@ -71,8 +71,9 @@ class ChildKeys {
   /// How many children lie on the smaller side of the fitted plane (0 to 4).
   int split() const { return split_; }
   /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;
-  /// above 0 only when constructed `with_gaps`), or, for gap = kFarRanking
-  /// (only when constructed `with_gaps`), the far ranking of spec 8A.8.
+  /// above 0 only when constructed `with_gaps`), or, for gap = kFarRanking,
+  /// the far ranking of spec 8A.8 (without `with_gaps`, as if no neighbour
+  /// were given).
   void order(unsigned first_mask, int gap, std::array<int, 8>& order) const;
   /// ranked_symbol() of `occupancy` (not 0) under that ranking, without
   /// sorting: the encoders' trials of several weights.
