@@ -37,7 +37,8 @@ struct RefinementParams {
   /// plane fitted to the neighbours crosses the node.
   bool plane_contexts = false;
   /// Coder 3 (spec 8A.4), 0 to 15: how much a child's distance from the
-  /// nearest neighbour moves it up the ranking (0: not at all, coders 0, 2).
+  /// nearest neighbour moves it up the ranking (0: not at all, coders 0, 2);
+  /// kFarRanking (16) for every depth: coder 7's far ranking.
   int gap = 0;
   /// Coder 4 (spec 8A.5): when not empty, q weights (0 to 15), one per
   /// depth, in place of `gap`. Coder 7 (spec 8A.8): a weight may also be
