@@ -1629,7 +1629,7 @@ HANDBUILT = [
     ("refn-paired-single", lambda: hb_refn_paired()[2], P,
      "REFN coder 6 at q = 2 adding one point: each paired table's pair code is the one-symbol form, and the layer's symbols cost no bits", sec("refn", "huff")),
     ("refn-far", lambda: hb_refn_far()[0], P,
-     "REFN coder 7 (far ranking) on random points filling a cube, q = 8: neighbours 8 with weight 16 at five depths and 0, 3, 15 at the others, plane contexts, 3 classes, alternate tables paired; weight 16 at every depth with the quadric through 10 neighbours breaking ties, 2 classes; neighbours 0 with weight 16 (g = 0: the order of the child numbers)", sec("refn", "huff")),
+     "REFN coder 7 (far ranking) on random points filling a cube, q = 8: neighbours 8 with weight 16 at four depths and 0, 3, 15 and 0 at the others, plane contexts, 3 classes, alternate tables paired; weight 16 at every depth with the quadric through 10 neighbours breaking ties, 2 classes; neighbours 0 with weight 16 (g = 0: the order of the child numbers)", sec("refn", "huff")),
     ("refn-far-lattice", lambda: hb_refn_far()[1], P,
      "REFN coder 7 on lattice points plus random ones at q = 5: neighbours 4 and weight 16 at every depth, unshared tables, many children equally far from their nearest neighbour (ties by t, e, child number)", sec("refn", "huff")),
     ("base-gaps", lambda: hb_base_gaps()[0], P,
