@@ -620,12 +620,12 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     }
     // Each depth's weight: the one whose symbols have the least entropy in
     // that depth's contexts (w, x) (table costs aside; the plan decides),
-    // among the gap weights, then also with far ranking (coder 7, whose
-    // header costs more: a mix with it must not displace the mix without).
-    for (const bool far : {false, true}) {
-      if (others.empty() || (far && !any_far(others))) continue;
-      std::vector<int> mixed(static_cast<std::size_t>(q), 0);
-      std::vector<std::uint64_t> mixed_freq = freq;
+    // among the gap weights (mix 0), and also with far ranking (mix 1:
+    // coder 7, whose header costs more, must not displace the mix without).
+    if (!others.empty()) {
+      const int mixes = any_far(others) ? 2 : 1;
+      std::vector<std::vector<int>> mixed(2, std::vector<int>(static_cast<std::size_t>(q), 0));
+      std::vector<std::vector<std::uint64_t>> mixed_freq(2, freq);
       for (int d = 0; d < q; ++d) {
         const std::size_t at = static_cast<std::size_t>(d) * depth_rows;
         const auto cost = [&](const std::vector<std::uint64_t>& f) {
@@ -633,19 +633,23 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
           for (std::size_t row = 0; row < 18; ++row) bits += entropy_bits(f.data() + at + row * kAlphabet, kAlphabet);
           return bits;
         };
-        double least = cost(freq);
+        const double plain = cost(freq);
+        double least[2] = {plain, plain};
         for (std::size_t j = 0; j < others.size(); ++j) {
-          if (!far && others[j] == kFarRanking) continue;
-          if (const double c = cost(traversal.counts[j]); c < least) {
-            least = c;
-            mixed[static_cast<std::size_t>(d)] = others[j];
+          const double c = cost(traversal.counts[j]);
+          for (int m = others[j] == kFarRanking ? 1 : 0; m < mixes; ++m) {
+            if (!(c < least[m])) continue;
+            least[m] = c;
+            mixed[static_cast<std::size_t>(m)][static_cast<std::size_t>(d)] = others[j];
             std::copy_n(traversal.counts[j].begin() + static_cast<std::ptrdiff_t>(at), depth_rows,
-                        mixed_freq.begin() + static_cast<std::ptrdiff_t>(at));
+                        mixed_freq[static_cast<std::size_t>(m)].begin() + static_cast<std::ptrdiff_t>(at));
           }
         }
       }
-      TablePlan p = plan_of(mixed_freq, mixed, fit);
-      if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
+      for (std::size_t m = 0; m < static_cast<std::size_t>(mixes); ++m) {
+        TablePlan p = plan_of(mixed_freq[m], mixed[m], fit);
+        if (bytes_of(p) < bytes_of(plan)) plan = std::move(p), better = true;
+      }
     }
     if (!best || bytes_of(plan) < bytes_of(best->plan)) {
       if (better) {
