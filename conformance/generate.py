@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x16"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x17"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -371,14 +371,15 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
-def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None):
+def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None, wide=False):
     """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
     (refdec.child_order over the node centres of each depth); ranked[d]
     says whether depth d is ranked; `classes` contexts per ranked depth.
     gaps: coder 2 (§8.3) with weight gaps[d] at each ranked depth.
     quadric: coder 3 (§8.4), with gaps, and quadric[d] the depth's flag.
     paired: coder 4 (§8.5), with gaps and quadric; paired(d, j) says whether
-    table j of depth d is paired (§7.4)."""
+    table j of depth d is paired (§7.4). wide: coder 5 (§8.6), coder 4 with
+    5-bit weights, 16 the far ranking."""
     syms = []
     for d, nodes, occ_by_node in octree_levels(points, q):
         if not ranked[d]:
@@ -408,7 +409,7 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
     for d in range(q):
         bw.put(1 if ranked[d] else 0, 1)
         if ranked[d] and gaps:
-            bw.put(gaps[d], 4)
+            bw.put(gaps[d], 5 if wide else 4)
         if ranked[d] and quadric is not None:
             bw.put(1 if quadric[d] else 0, 1)
         if ranked[d]:
@@ -432,13 +433,13 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
                 coders[d][v[0]].put(bw, v[1])
             else:
                 coders[d][0].put(bw, v)
-    coder = b"\x04" if paired else b"\x03" if quadric is not None else b"\x02" if gaps else b"\x01"
+    coder = (b"\x05" if wide else b"\x04") if paired else b"\x03" if quadric is not None else b"\x02" if gaps else b"\x01"
     return coder + bw.bytes()
 
 
-def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None):
+def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None, wide=False):
     pts = sorted(set(pts))
-    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps, quadric, paired),
+    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps, quadric, paired, wide),
                      counts=(len(pts),),
                      kind=kind, q=q,
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
@@ -1452,6 +1453,35 @@ def hb_base_paired():
     return a, b
 
 
+def jittered_cube(n, step, jitter, seed):
+    """Points filling a cube about evenly, as a volume's interior: a lattice
+    of n^3 points `step` apart, each moved by up to `jitter` per axis."""
+    r = random.Random(seed)
+    return sorted({tuple(c * step + jitter + r.randint(-jitter, jitter) for c in (x, y, z))
+                   for x in range(n) for y in range(n) for z in range(n)})
+
+
+def hb_base_far():
+    # BASE coder 5 (far ranking): a jittered lattice filling a cube at q = 7,
+    # neighbours 10, weight 16 mixed with weights 0-15 by depth, quadric
+    # flags mixed (with weight 16 the quadric breaks ties), tables paired at
+    # some depths; an exact lattice plus random points (many equally far
+    # children), neighbours 15, weight 16 at every ranked depth, kind
+    # surface; neighbours 1 (no point besides the node's own centre: g = 0,
+    # weight 16 ranks by t, e, c alone).
+    a = base_ranked_stream(0, 7, jittered_cube(7, 16, 5, 131), 10, [False, True, True, True, True, True, True],
+                           classes=3, gaps=[0, 16, 3, 16, 16, 0, 16],
+                           quadric=[False, False, True, True, False, True, True],
+                           paired=lambda d, j: (d * 3 + j) % 4 != 1, wide=True)
+    b = base_ranked_stream(1, 6, lattice_pts(5, 12, (3, 5, 7)) + rand_pts(50, 6, 132), 15, [True] * 6, classes=2,
+                           gaps=[16] * 6, quadric=[True, False, True, False, True, True],
+                           paired=lambda d, j: d % 2 == 0, wide=True)
+    c = base_ranked_stream(0, 5, rand_pts(60, 5, 133), 1, [False, True, True, True, True], classes=1,
+                           gaps=[0, 16, 2, 16, 16], quadric=[False, True, False, False, True],
+                           paired=lambda d, j: False, wide=True)
+    return a, b, c
+
+
 def hb_base_ranked_sphere():
     return base_ranked_stream(0, 8, sphere_pts(400, 8, 41), 10, [True] * 8, classes=4)
 
@@ -1648,6 +1678,12 @@ HANDBUILT = [
      "BASE coder 4 (paired tables) on a sphere at q = 8: neighbours 10, every table paired, the plain depth 0's too, escapes, phantom pairs in sparse contexts, quadric and plane depths, 3 contexts", sec("base", "huff")),
     ("base-paired-lattice", lambda: hb_base_paired()[1], P,
      "BASE coder 4 on lattice and random points, kind surface: neighbours 15, tables paired at alternate depths and contexts, 2 contexts", sec("base", "huff")),
+    ("base-far", lambda: hb_base_far()[0], P,
+     "BASE coder 5 (far ranking) on a jittered lattice filling a cube at q = 7: neighbours 10, weight 16 at four depths mixed with weights 0 and 3, quadric ties and plane ties, tables paired at some depths, 3 contexts", sec("base", "huff")),
+    ("base-far-lattice", lambda: hb_base_far()[1], P,
+     "BASE coder 5 on lattice points plus random ones, kind surface: neighbours 15, weight 16 at every depth (many equally far children), tables paired at even depths, 2 contexts", sec("base", "huff")),
+    ("base-far-neighbours-1", lambda: hb_base_far()[2], P,
+     "BASE coder 5 with neighbours 1 (no point besides the node's own centre: g = 0, weight 16 ranks by the plane-less t, e and c), no table paired, 1 context", sec("base", "huff")),
     ("base-causal-neighbours-0", lambda: hb_base_causal()[4], P,
      "BASE coder 3 with neighbours 0 (no points: every child ties, the order is the child number), weights and quadric flags that change nothing, 2 contexts", sec("base", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
@@ -1882,8 +1918,11 @@ NEGATIVE = [
     ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
     ("neg-base-gaps-cut", "bad_layer", P, "BASE coder 2 at q = 1 whose payload ends inside the weight of its ranked depth", ["8.3", "13"],
      lambda: stream_q1(b"\x02" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(1, 1), bw.put(1, 1))))),
-    ("neg-base-coder", "bad_layer", P, "BASE coder 5", ["8", "13"],
-     lambda: stream_q1(b"\x05" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-coder", "bad_layer", P, "BASE coder 6", ["8", "13"],
+     lambda: stream_q1(b"\x06" + base_payload([(0, 0, 0)], 1)[1:])),
+    ("neg-base-far-weight", "bad_layer", P, "BASE coder 5 at q = 1 whose ranked depth's weight is 17 (above 16)", ["8.6", "13"],
+     lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(1, 1), bw.put(17, 5), bw.put(0, 1),
+                                                            bw.put(0, 1), write_table(bw, 255, lengths={0: 1, 1: 1}), bw.put(0, 1))))),
     ("neg-base-paired-single", "bad_layer", P, "BASE coder 4 at q = 1 whose ranked depth's paired table has a one-symbol pair code (pairs would cost no bits)", ["7.4", "8.5", "13"],
      lambda: stream_q1(b"\x04" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 4), bw.put(0, 1),
                                                             bw.put(1, 1), bw.put(1, 1), bw.put(0, 7))))),

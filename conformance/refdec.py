@@ -309,7 +309,7 @@ def causal_points(nodes, occs, i, nb, neighbours, h):
 def decode_base(payload, q, n, form=1):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
-    if payload[0] not in (0, 1, 2, 3, 4):
+    if payload[0] not in (0, 1, 2, 3, 4, 5):
         raise DecodeError("bad_layer", "BASE: unknown coder %d" % payload[0])
     coder = payload[0]
     br = BitReader(payload, 1, "bad_layer", "BASE")
@@ -318,10 +318,13 @@ def decode_base(payload, q, n, form=1):
     ranked, tables, gaps, quadric = [], [], [], []
     for _ in range(q):
         ranked.append(coder >= 1 and br.bits(1) == 1)
-        gaps.append(br.bits(4) if ranked[-1] and coder >= 2 else 0)  # §8.3: the depth's gap weight
+        # §8.3: the depth's gap weight; §8.6: 5 bits, 16 the far ranking
+        gaps.append(br.bits(5 if coder == 5 else 4) if ranked[-1] and coder >= 2 else 0)
+        if gaps[-1] > 16:
+            raise DecodeError("bad_layer", "BASE: ranking weight %d above 16" % gaps[-1])
         quadric.append(br.bits(1) == 1 if ranked[-1] and coder >= 3 else False)  # §8.4
-        tables.append([read_table(br, 255, form, coder == 4) for _ in range(classes)] if ranked[-1]
-                      else [read_table(br, 256, form, coder == 4)])
+        tables.append([read_table(br, 255, form, coder >= 4) for _ in range(classes)] if ranked[-1]
+                      else [read_table(br, 256, form, coder >= 4)])
         # §8.2: every ranked node costs a bit; §8.5: every pair of them when paired
         if ranked[-1] and any((t.pairs if isinstance(t, PairedCode) else t).single is not None for t in tables[-1]):
             raise DecodeError("bad_layer", "BASE: a one-symbol code at ranked depth %d" % (len(tables) - 1))
@@ -518,7 +521,8 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
     gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1. gap_from:
     the distances g skip the first gap_from neighbours (§8.3: the node itself).
     fit: coder 5's F (§8A.6), the points the quadric is fitted to.
-    gap 16: coder 7's far ranking (§8A.8), by g alone, farthest first.
+    gap 16: coder 7's far ranking (§8A.8) and BASE coder 5's (§8.6), by g
+    alone, farthest first.
     points: the neighbours themselves (§8.4), instead of a search in coarse;
     the first `fit` of them are the fit points."""
     X, Y, Z = node

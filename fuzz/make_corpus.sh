@@ -217,9 +217,9 @@ put("base_layer", "single-full-q3", base_input(3, 512, single_symbol_octree(3, [
 put("base_layer", "single-chain-q21", base_input(21, 1, single_symbol_octree(21, [1] * 21)))
 put("base_layer", "empty-q1", base_input(1, 1, b""))
 put("base_layer", "coder1-empty-q1", base_input(1, 1, b"\x01"))
-# Coder 4 (paired tables) from the conformance vectors: the samples' base
-# layers pair none.
-for case in ("base-paired", "base-paired-lattice"):
+# Coders 4 (paired tables) and 5 (far ranking) from the conformance
+# vectors: the samples' base layers pair none and are surfaces.
+for case in ("base-paired", "base-paired-lattice", "base-far", "base-far-lattice"):
     with open(os.path.join(root, "conformance", "vectors", case, "stream.hmc"), "rb") as f:
         parts = dict(chunks(f.read()))
     put("base_layer", case, base_input(parts["SQNT"][0], base_points(parts["HEAD"]), parts["BASE"]))

@@ -533,7 +533,7 @@ TEST_CASE("malformed refinement streams are rejected, never misread") {
   }
 }
 
-TEST_CASE("base layer: the ranked octree (coders 2-4) codes surfaces smaller and decodes every set exactly") {
+TEST_CASE("base layer: the ranked octree (coders 2-5) codes surfaces smaller and decodes every set exactly") {
   // A sampled surface: the plane through the neighbouring node centres
   // predicts the children, so the ranked coder is chosen and is smaller.
   const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
@@ -553,9 +553,9 @@ TEST_CASE("base layer: the ranked octree (coders 2-4) codes surfaces smaller and
       Points p = quantize(m, q);
       sort_canonical(p);
       p.erase(std::unique(p.begin(), p.end()), p.end());
-      for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{3}, std::uint8_t{4}}) {
+      for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{3}, std::uint8_t{4}, std::uint8_t{5}}) {
         const auto b = encode_base(p, q, coder);
-        CHECK((b[0] == 0 || b[0] == coder || (coder == 4 && b[0] == 3)));
+        CHECK((b[0] == 0 || b[0] == coder || (coder >= 4 && b[0] >= 3 && b[0] <= coder)));
         CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
       }
     }
@@ -593,17 +593,17 @@ struct RankedDepth {
   int paired = 0;
 };
 std::vector<RankedDepth> ranked_depths(const std::vector<std::uint8_t>& base, int q) {
-  REQUIRE((base[0] == 2 || base[0] == 3 || base[0] == 4));
+  REQUIRE((base[0] >= 2 && base[0] <= 5));
   BitReader in(base.data() + 1, base.size() - 1, "test");
   in.get(4);
   const int classes = static_cast<int>(in.get(2)) + 1;
   std::vector<RankedDepth> out(static_cast<std::size_t>(q));
   for (auto& d : out) {
     d.ranked = in.get(1) == 1;
-    if (d.ranked) d.gap = static_cast<int>(in.get(4));
+    if (d.ranked) d.gap = static_cast<int>(in.get(base[0] == 5 ? 5 : 4));
     if (d.ranked && base[0] >= 3) d.quadric = in.get(1) == 1;
     for (int j = 0; j < (d.ranked ? classes : 1); ++j)
-      d.paired += TableCode::read(in, d.ranked ? 255 : 256, base[0] == 4, "test", TableForm::deltas).paired();
+      d.paired += TableCode::read(in, d.ranked ? 255 : 256, base[0] >= 4, "test", TableForm::deltas).paired();
   }
   return out;
 }
@@ -686,7 +686,7 @@ TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before
       if (((g[0] | g[1] | g[2]) >> q) == 0) p.push_back(g);
     p = sorted(p);
     const auto b = encode_base(p, q);
-    CHECK((b[0] == 3 || b[0] == 4));
+    CHECK((b[0] >= 3 && b[0] <= 5));
     CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
   }
 }
@@ -729,6 +729,58 @@ TEST_CASE("base layer: coder 4 pairs the tables where that is smaller, and a ran
   const auto bits = w.finish();
   bad.insert(bad.end(), bits.begin(), bits.end());
   CHECK(status_of([&] { decode_base(bad.data(), bad.size(), 1, 1); }) == Status::bad_layer);
+}
+
+TEST_CASE("base layer: coder 5 ranks the children of a volume's interior farthest from the points around them") {
+  // Points kept at least r apart filling a ball, as a tetrahedral mesh
+  // spaces its interior: no plane passes through them, and at the depths of
+  // one point per node the occupied child is the one far from the points
+  // known around it. Coder 5's weight 16 pays there (0.6 % on these
+  // points, 1.3 % on the one-level streams of the shared TetGen volumes).
+  const Points even = sorted(evenly_spread(quantize(samples::random_ball(20000, 17), 12), 150));
+  REQUIRE(even.size() > 2000);
+  const auto four = encode_base(even, 12, 4), five = encode_base(even, 12);
+  REQUIRE((four[0] == 3 || four[0] == 4));
+  REQUIRE(five[0] == 5);
+  MESSAGE(even.size() << " points: coder " << int{four[0]} << " " << four.size() << " bytes, coder 5 " << five.size());
+  CHECK(five.size() < four.size());
+  CHECK(decode_base(five.data(), five.size(), 12, even.size()) == even);
+  const auto depths = ranked_depths(five, 12);
+  CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.gap == 16; }));
+  // Read as coder 4 (4-bit weights), the stream fails or gives another set.
+  CHECK_FALSE(decodes_as(five, 4, 12, even));
+  // On a sampled surface the plane and the quadric rank better: no depth
+  // takes weight 16 there, so the encoder keeps coder 3 or 4.
+  const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
+  const auto surface = encode_base(sphere, 12);
+  CHECK((surface[0] == 3 || surface[0] == 4));
+  CHECK(surface == encode_base(sphere, 12, 4));
+  // Weight 16 ranks by g alone, farthest first: node (0,0,0) at depth 1 of
+  // q = 3 (centre 4,4,4; children's centres 2 or 6 per axis) and points
+  // (1,1,1) and (1,3,7) beside children 0 and 1: child 6, (6,6,2), is the
+  // farthest from both (g = 51; the next, 7, g = 35), and weight 0 (the
+  // plane through the three points) orders the children otherwise.
+  const Doubled nb[3] = {{4, 4, 4}, {1, 1, 1}, {1, 3, 7}};
+  std::array<int, 8> far{}, plain{};
+  ChildKeys(GridPoint{0, 0, 0}, 1, 3, nb, 3, true, 1).order(0u, kFarRanking, far);
+  ChildKeys(GridPoint{0, 0, 0}, 1, 3, nb, 3, true, 1).order(0u, 0, plain);
+  CHECK(far[0] == 6);
+  CHECK(far != plain);
+  // Weights above 16 are refused before any table is read.
+  for (const std::uint32_t weight : {17u, 31u}) {
+    CAPTURE(weight);
+    BitWriter w;
+    w.put(1, 4);       // neighbours
+    w.put(0, 2);       // one context
+    w.put(1, 1);       // depth 0 ranked
+    w.put(weight, 5);  // its weight
+    w.put(0, 1);       // no quadric
+    w.put(0, 1);       // a plain table: lengths 1, 1 (symbols 0 and 1)
+    std::vector<std::uint8_t> bad{5};
+    const auto bits = w.finish();
+    bad.insert(bad.end(), bits.begin(), bits.end());
+    CHECK(status_of([&] { decode_base(bad.data(), bad.size(), 1, 1); }) == Status::bad_layer);
+  }
 }
 
 TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and the node itself is not a gap") {

@@ -33,6 +33,7 @@ const char* base_coder_name(int coder) {
     case 2: return "ranked octree, gap weights";
     case 3: return "ranked octree, causal points";
     case 4: return "ranked octree, causal points, paired tables";
+    case 5: return "ranked octree, far ranking";
     default: return "unknown";
   }
 }

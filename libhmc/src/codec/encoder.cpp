@@ -499,7 +499,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     const std::size_t before = w.size();
     ByteWriter layer;
     if (i + 1 == plans.size()) {
-      layer.bytes(encode_base(plan.points, q, options.fast_decode ? 0 : 4));
+      layer.bytes(encode_base(plan.points, q, options.fast_decode ? 0 : 5));
       w.chunk(kBaseLayer, layer.data());
       level.new_points = plan.points.size();
     } else if (!lossy_payloads.empty()) {

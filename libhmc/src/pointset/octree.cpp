@@ -168,9 +168,12 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
 
 namespace {
 
-constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2, kCausalCoder = 3, kPairedCoder = 4;
-// The gap weights the reference encoder tries at a ranked depth (coder 2).
-constexpr std::array<int, 9> kGapChoices{0, 1, 2, 3, 4, 6, 8, 11, 15};
+constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2, kCausalCoder = 3, kPairedCoder = 4,
+                       kFarCoder = 5;
+// The gap weights the reference encoder tries at a ranked depth: coders 2-4
+// the first nine, coder 5 also kFarRanking (spec 8.6).
+constexpr std::array<int, 10> kGapChoices{0, 1, 2, 3, 4, 6, 8, 11, 15, kFarRanking};
+constexpr std::size_t kFarChoice = kGapChoices.size() - 1;  // kFarRanking's index
 constexpr int kMaxNeighbours = 15;  // 4-bit field
 // The neighbour counts the reference encoder tries: coder 2 the first,
 // coder 3 both (15 suits surfaces, whose nodes then take more decoded
@@ -308,11 +311,14 @@ class DepthNodes {
 // depth's gap weight and quadric flag; coder 2 (no flags) unless `causal`.
 // With `pairing` (coder 3 only), coder 4 when pairing some tables (spec
 // 7.4) saves more than their flags cost: `paired` says which was written.
+// `wide` (with `causal` and `pairing`): coder 5, 5-bit weights and a flag
+// before every table, each paired where that is smaller (spec 8.6).
 std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels, int q, int classes,
                                        const std::vector<std::vector<std::uint8_t>>& ranked_sym,
                                        const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked,
                                        const std::vector<int>& gaps, const std::vector<bool>& quadric, bool causal,
-                                       int neighbours, bool pairing, bool& paired) {
+                                       int neighbours, bool pairing, bool& paired, bool wide = false) {
+  const unsigned weight_bits = wide ? 5u : 4u;
   any_ranked = false;
   std::vector<bool> ranked(static_cast<std::size_t>(q), false);
   // Per depth, its tables' symbol sequences in node order (one table at a
@@ -333,7 +339,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
     // Rank only where it pays for the decoder's searches: 2% of the depth
     // (the depth's weight, and quadric flag, included).
     const std::uint64_t ranked_bits =
-        std::accumulate(context_bits.begin(), context_bits.end(), std::uint64_t{causal ? 5u : 4u});
+        std::accumulate(context_bits.begin(), context_bits.end(), std::uint64_t{weight_bits + (causal ? 1u : 0u)});
     const bool use = !ranked_sym[sd].empty() && 100 * ranked_bits < 98 * plain_bits;
     table_bits[sd] = use ? std::move(context_bits) : std::vector<std::uint64_t>{plain_bits};
     ranked[sd] = use;
@@ -364,7 +370,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
       pair[sd].push_back(pairs < plain);
     }
   }
-  paired = pairing && saved > flags;
+  paired = pairing && (wide || saved > flags);
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(classes - 1), 2);
@@ -372,7 +378,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     w.put(ranked[sd] ? 1 : 0, 1);
-    if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), 4);
+    if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), static_cast<int>(weight_bits));
     if (ranked[sd] && causal) w.put(quadric[sd] ? 1 : 0, 1);
     for (std::size_t j = 0; j < seqs[sd].size(); ++j) {
       codes[sd].push_back(
@@ -392,6 +398,15 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   return w.finish();
 }
 
+// Whether coder `coder` may rank by choice g of DepthNodes::symbols (a
+// weight of kGapChoices, by the plane below kGapChoices.size(), by the
+// quadric from there): coder 2 by the plane with the first nine weights,
+// coders 3 and 4 by the quadric too, coder 5 also with kFarRanking.
+bool choice_open(std::size_t g, std::uint8_t coder) {
+  if (g % kGapChoices.size() == kFarChoice && coder < kFarCoder) return false;
+  return coder >= kCausalCoder || g < kGapChoices.size();
+}
+
 // Whether ranking a large depth may pay, judged on a Morton-contiguous
 // (so spatially compact) block of its nodes: 8,192 nodes indexed by
 // themselves, the middle half ranked. An estimate (neighbours outside the
@@ -401,7 +416,9 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
 // choose (coder 2 unless `causal`), each judged by its symbols' entropy:
 // the best one decides (at the bunny's last depth the plane alone saves
 // 0.4 %, the quadric with gap weights 17 %).
-bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q, bool causal) {
+bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q,
+                     std::uint8_t coder) {
+  const bool causal = coder >= kCausalCoder;
   constexpr std::size_t kBlock = 8192;
   const std::size_t n = nodes.size();
   if (n <= 2 * kBlock) return true;
@@ -421,8 +438,8 @@ bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupan
   }
   double least = entropy_bits(plain.data(), plain.size());
   const double bound = 0.995 * least;
-  for (std::size_t g = 0; g < (causal ? kRankings : kGapChoices.size()); ++g)
-    least = std::min(least, entropy_bits(ranked.data() + g * 255, 255));
+  for (std::size_t g = 0; g < kRankings; ++g)
+    if (choice_open(g, coder)) least = std::min(least, entropy_bits(ranked.data() + g * 255, 255));
   return least < bound;
 }
 
@@ -436,18 +453,21 @@ struct RankedDepths {
 };
 
 // Node i's symbols and context for every choice (weight, plane or quadric)
-// are all[i * kChoices + choice], ctx[i]; returns the cheapest choice,
-// tables included, with the 4 contexts merged into 1, 2 or 4 as
-// write_ranked may merge them.
+// are all[i * kChoices + choice], ctx[i]; returns the cheapest choice open
+// to coder `coder` (choice_open), tables included, with the 4 contexts
+// merged into 1, 2 or 4 as write_ranked may merge them, and (second) the
+// cheapest of those without kFarRanking.
 constexpr std::size_t kChoices = 2 * kGapChoices.size();  // plane, then quadric, for each weight
-std::size_t cheapest_choice(const std::vector<std::uint8_t>& all, const std::vector<std::uint8_t>& ctx, bool causal) {
+std::pair<std::size_t, std::size_t> cheapest_choice(const std::vector<std::uint8_t>& all,
+                                                    const std::vector<std::uint8_t>& ctx, std::uint8_t coder) {
   std::vector<std::vector<std::uint64_t>> freq(kChoices, std::vector<std::uint64_t>(4 * 255, 0));
   for (std::size_t i = 0; i < ctx.size(); ++i)
     for (std::size_t g = 0; g < kChoices; ++g)
       ++freq[g][static_cast<std::size_t>(ctx[i]) * 255 + all[i * kChoices + g]];
-  std::size_t chosen = 0;
-  double least = 0;
-  for (std::size_t g = 0; g < (causal ? kChoices : kGapChoices.size()); ++g) {
+  std::size_t chosen = 0, near = 0;
+  double least = 0, least_near = 0;
+  for (std::size_t g = 0; g < kChoices; ++g) {
+    if (!choice_open(g, coder)) continue;
     double bits = 0;
     for (std::size_t classes : {1, 2, 4}) {
       std::vector<std::vector<std::uint64_t>> merged(classes, std::vector<std::uint64_t>(255, 0));
@@ -456,26 +476,32 @@ std::size_t cheapest_choice(const std::vector<std::uint8_t>& all, const std::vec
       for (const auto& f : merged) bits += static_cast<double>(coded_bits(two_symbols_at_least(f)));
     }
     if (g == 0 || bits < least) least = bits, chosen = g;
+    if (g % kGapChoices.size() != kFarChoice && (g == 0 || bits < least_near)) least_near = bits, near = g;
   }
-  return chosen;
+  return {chosen, near};
 }
 
 // Coder 3: at every depth, the ranked symbols for the gap weight and
 // ranking (plane or quadric) that make them cheapest, for each neighbour
 // count of kBaseNeighbours; the smallest stream. Coder 2 (the weight
-// alone, the ranking of 8.3, the first neighbour count) unless `causal`;
-// with `pairing`, coder 4 where it is smaller (`paired` says so).
+// alone, the ranking of 8.3, the first neighbour count) for `coder` 2;
+// for 4, coder 4 where it is smaller; for 5, coder 5 where the far ranking
+// makes it smaller still. `coder` is set to the one written.
 std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
-                                        int q, bool& any_ranked, bool causal, bool pairing, bool& paired) {
+                                        int q, bool& any_ranked, std::uint8_t& coder) {
   const auto sq = static_cast<std::size_t>(q);
+  const bool causal = coder >= kCausalCoder, pairing = coder >= kPairedCoder, far = coder >= kFarCoder;
   const std::size_t counts = causal ? kBaseNeighbours.size() : 1;
+  // by_count[n]: without the far ranking; with_far[n]: with it, where some
+  // depth takes it (else empty).
   std::vector<RankedDepths> by_count(counts, RankedDepths(sq));
+  std::vector<std::optional<RankedDepths>> with_far(counts);
   std::vector<std::uint8_t> all;
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     const auto nodes = nodes_at(keys, d, q);
     const auto& occ = levels[sd].occupancy;
-    if (!ranking_may_pay(nodes, levels[sd], d, q, causal)) continue;
+    if (!ranking_may_pay(nodes, levels[sd], d, q, coder)) continue;
     const DepthNodes depth(nodes, d, q);
     all.resize(occ.size() * kChoices);
     for (std::size_t n = 0; n < counts; ++n) {
@@ -488,42 +514,58 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
         ctx[i] = static_cast<std::uint8_t>(c);
         std::copy(s.begin(), s.end(), all.begin() + static_cast<std::ptrdiff_t>(i * kChoices));
       }
-      const std::size_t chosen = cheapest_choice(all, ctx, causal);
-      r.gaps[sd] = kGapChoices[chosen % kGapChoices.size()];
-      r.quadric[sd] = chosen >= kGapChoices.size();
-      r.symbols[sd].resize(occ.size());
-      for (std::size_t i = 0; i < nodes.size(); ++i) r.symbols[sd][i] = all[i * kChoices + chosen];
+      const auto [chosen, near] = cheapest_choice(all, ctx, coder);
+      auto take = [&](RankedDepths& into, std::size_t choice) {
+        into.gaps[sd] = kGapChoices[choice % kGapChoices.size()];
+        into.quadric[sd] = choice >= kGapChoices.size();
+        into.symbols[sd].resize(occ.size());
+        for (std::size_t i = 0; i < nodes.size(); ++i) into.symbols[sd][i] = all[i * kChoices + choice];
+      };
+      if (far && chosen != near && !with_far[n]) with_far[n] = r;  // the depths before, as without it
+      take(r, near);
+      if (with_far[n]) {
+        with_far[n]->context[sd] = ctx;
+        take(*with_far[n], chosen);
+      }
     }
   }
   // Each neighbour count with 1, 2 or 4 contexts: the smallest stream, but
   // more neighbours only where they save 1% of it (they make decoding
   // slower: on the bunny's base layer, 15 instead of 10 take points-only
-  // decoding from 0.21 to 0.33 s for 0.3%).
-  // The neighbour count is chosen on the unpaired streams, then pairing
-  // kept where it makes the chosen one smaller.
-  std::vector<std::uint8_t> best;
-  std::size_t best_count = 0;
-  for (std::size_t n = 0; n < counts; ++n) {
-    std::vector<std::uint8_t> smallest;
-    bool smallest_any = false;
+  // decoding from 0.21 to 0.33 s for 0.3%). Coder 5 (its tables paired
+  // where that is smaller) competes with the unpaired streams here.
+  // The neighbour count is chosen so, then pairing kept where it makes the
+  // chosen count's stream without the far ranking smaller.
+  auto smallest_of = [&](const RankedDepths& r, std::size_t n, bool wide, std::vector<std::uint8_t>& smallest,
+                         bool& smallest_any) {
     for (int classes : {1, 2, 4}) {
-      const RankedDepths& r = by_count[n];
       bool any = false, unused = false;
       auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal,
-                                kBaseNeighbours[n], false, unused);
+                                kBaseNeighbours[n], wide, unused, wide);
       if (smallest.empty() || bytes.size() < smallest.size()) smallest = std::move(bytes), smallest_any = any;
     }
+  };
+  std::vector<std::uint8_t> best;
+  std::size_t best_count = 0;
+  bool best_far = false;
+  for (std::size_t n = 0; n < counts; ++n) {
+    std::vector<std::uint8_t> smallest, wide;
+    bool smallest_any = false, wide_any = false;
+    smallest_of(by_count[n], n, false, smallest, smallest_any);
+    if (with_far[n]) smallest_of(*with_far[n], n, true, wide, wide_any);
+    const bool use_far = !wide.empty() && wide.size() < smallest.size();
+    if (use_far) smallest = std::move(wide), smallest_any = wide_any;
     if (best.empty() || 100 * smallest.size() < 99 * best.size())
-      best = std::move(smallest), any_ranked = smallest_any, best_count = n;
+      best = std::move(smallest), any_ranked = smallest_any, best_count = n, best_far = use_far;
   }
-  paired = false;
+  coder = best_far ? kFarCoder : causal ? kCausalCoder : kGapCoder;
   if (!pairing) return best;
   for (int classes : {1, 2, 4}) {
     const RankedDepths& r = by_count[best_count];
     bool any = false, with_pairs = false;
     auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal,
                               kBaseNeighbours[best_count], true, with_pairs);
-    if (with_pairs && bytes.size() < best.size()) best = std::move(bytes), any_ranked = any, paired = true;
+    if (with_pairs && bytes.size() < best.size()) best = std::move(bytes), any_ranked = any, coder = kPairedCoder;
   }
   return best;
 }
@@ -580,21 +622,28 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
 }
 
 // Coder 1, 2 (a gap weight per ranked depth), 3 (a gap weight and a
-// quadric flag per ranked depth, and the causal points) or 4 (coder 3 with
-// a pairing flag per table).
+// quadric flag per ranked depth, and the causal points), 4 (coder 3 with
+// a pairing flag per table) or 5 (coder 4 with 5-bit weights).
 std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form,
                                      std::uint8_t coder) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
-  const bool causal = coder >= kCausalCoder, flagged = coder == kPairedCoder;
+  const bool causal = coder >= kCausalCoder, flagged = coder >= kPairedCoder;
+  const int weight_bits = coder == kFarCoder ? 5 : 4;  // coder 5: 0-15 and kFarRanking (spec 8.6)
   std::vector<std::vector<TableCode>> codes(static_cast<std::size_t>(q));
   std::vector<bool> ranked;
   std::vector<int> gaps(static_cast<std::size_t>(q), 0);
   std::vector<bool> quadric(static_cast<std::size_t>(q), false);
   for (int d = 0; d < q; ++d) {
     ranked.push_back(in.get(1) == 1);
-    if (ranked.back() && coder >= kGapCoder) gaps[static_cast<std::size_t>(d)] = static_cast<int>(in.get(4));
+    if (ranked.back() && coder >= kGapCoder) {
+      const int gap = static_cast<int>(in.get(weight_bits));
+      if (gap > kFarRanking)
+        fail(Status::bad_layer, "BASE ranked octree: ranking weight " + std::to_string(gap) + " at depth " +
+                                    std::to_string(d) + " (at most 16)");
+      gaps[static_cast<std::size_t>(d)] = gap;
+    }
     if (ranked.back() && causal) quadric[static_cast<std::size_t>(d)] = in.get(1) == 1;
     const std::string what = "BASE ranked octree table for depth " + std::to_string(d);
     if (!ranked.back()) {
@@ -617,8 +666,8 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
 
 std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder) {
   if (ranked_coder != kPlainCoder && ranked_coder != kGapCoder && ranked_coder != kCausalCoder &&
-      ranked_coder != kPairedCoder)
-    fail(Status::invalid_argument, "BASE: the encoder writes coders 0, 2, 3 and 4 only");
+      ranked_coder != kPairedCoder && ranked_coder != kFarCoder)
+    fail(Status::invalid_argument, "BASE: the encoder writes coders 0, 2, 3, 4 and 5 only");
   const auto keys = sorted_keys(points, q);
   const auto levels = occupancies(keys, q);
   auto plain = write_octree(levels, q);
@@ -626,15 +675,15 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
     plain.insert(plain.begin(), kPlainCoder);
     return plain;
   }
-  bool any_ranked = false, paired = false;
-  auto ranked = encode_ranked(levels, keys, q, any_ranked, ranked_coder >= kCausalCoder, ranked_coder == kPairedCoder,
-                              paired);
+  bool any_ranked = false;
+  std::uint8_t coder = ranked_coder;
+  auto ranked = encode_ranked(levels, keys, q, any_ranked, coder);
   std::vector<std::uint8_t> out;
   // A ranked coder only when it saves 1% of the layer: its searches cost
   // decoding time (measured with coder 1: on a million random points in a
   // ball it saved 0.05% and made points-only decoding 25% slower).
   const bool use_ranked = any_ranked && 100 * ranked.size() < 99 * plain.size();
-  out.push_back(!use_ranked ? kPlainCoder : paired ? kPairedCoder : ranked_coder == kGapCoder ? kGapCoder : kCausalCoder);
+  out.push_back(use_ranked ? coder : kPlainCoder);
   const auto& body = use_ranked ? ranked : plain;
   out.insert(out.end(), body.begin(), body.end());
   return out;
@@ -643,7 +692,7 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
   if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
   if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n, form);
-  if (data[0] == kRankedCoder || data[0] == kGapCoder || data[0] == kCausalCoder || data[0] == kPairedCoder)
+  if (data[0] >= kRankedCoder && data[0] <= kFarCoder)
     return decode_ranked(data + 1, size - 1, q, n, form, data[0]);
   fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
 }
