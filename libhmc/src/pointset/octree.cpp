@@ -532,42 +532,37 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
   // Each neighbour count with 1, 2 or 4 contexts: the smallest stream, but
   // more neighbours only where they save 1% of it (they make decoding
   // slower: on the bunny's base layer, 15 instead of 10 take points-only
-  // decoding from 0.21 to 0.33 s for 0.3%). Coder 5 (its tables paired
-  // where that is smaller) competes with the unpaired streams here.
-  // The neighbour count is chosen so, then pairing kept where it makes the
-  // chosen count's stream without the far ranking smaller.
-  auto smallest_of = [&](const RankedDepths& r, std::size_t n, bool wide, std::vector<std::uint8_t>& smallest,
-                         bool& smallest_any) {
+  // decoding from 0.21 to 0.33 s for 0.3%). The neighbour count is chosen
+  // on coder 3's streams, then coder 4 (its tables paired where that is
+  // smaller) or coder 5 kept where it makes the chosen count's stream
+  // smaller.
+  struct Written {
+    std::vector<std::uint8_t> bytes;
+    bool any = false;
+    std::uint8_t coder = 0;
+  };
+  auto keep = [&](Written& out, std::size_t n, const RankedDepths& r, bool pairs, bool wide, std::uint8_t as) {
     for (int classes : {1, 2, 4}) {
-      bool any = false, unused = false;
+      bool any = false, with_pairs = false;
       auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal,
-                                kBaseNeighbours[n], wide, unused, wide);
-      if (smallest.empty() || bytes.size() < smallest.size()) smallest = std::move(bytes), smallest_any = any;
+                                kBaseNeighbours[n], pairs, with_pairs, wide);
+      if (pairs && !with_pairs) continue;  // the same stream as without pairing
+      if (out.bytes.empty() || bytes.size() < out.bytes.size()) out = {std::move(bytes), any, as};
     }
   };
-  std::vector<std::uint8_t> best;
+  Written best;
   std::size_t best_count = 0;
-  bool best_far = false;
   for (std::size_t n = 0; n < counts; ++n) {
-    std::vector<std::uint8_t> smallest, wide;
-    bool smallest_any = false, wide_any = false;
-    smallest_of(by_count[n], n, false, smallest, smallest_any);
-    if (with_far[n]) smallest_of(*with_far[n], n, true, wide, wide_any);
-    const bool use_far = !wide.empty() && wide.size() < smallest.size();
-    if (use_far) smallest = std::move(wide), smallest_any = wide_any;
-    if (best.empty() || 100 * smallest.size() < 99 * best.size())
-      best = std::move(smallest), any_ranked = smallest_any, best_count = n, best_far = use_far;
+    Written smallest;
+    keep(smallest, n, by_count[n], false, false, causal ? kCausalCoder : kGapCoder);
+    if (best.bytes.empty() || 100 * smallest.bytes.size() < 99 * best.bytes.size())
+      best = std::move(smallest), best_count = n;
   }
-  coder = best_far ? kFarCoder : causal ? kCausalCoder : kGapCoder;
-  if (!pairing) return best;
-  for (int classes : {1, 2, 4}) {
-    const RankedDepths& r = by_count[best_count];
-    bool any = false, with_pairs = false;
-    auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal,
-                              kBaseNeighbours[best_count], true, with_pairs);
-    if (with_pairs && bytes.size() < best.size()) best = std::move(bytes), any_ranked = any, coder = kPairedCoder;
-  }
-  return best;
+  if (pairing) keep(best, best_count, by_count[best_count], true, false, kPairedCoder);
+  if (with_far[best_count]) keep(best, best_count, *with_far[best_count], true, true, kFarCoder);
+  any_ranked = best.any;
+  coder = best.coder;
+  return best.bytes;
 }
 
 // The number of children an occupancy byte names (a table: without a

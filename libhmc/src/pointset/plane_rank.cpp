@@ -38,8 +38,7 @@ template <std::size_t N>
 void reduce(std::array<std::int64_t, N>& v, int bits) {
   std::uint64_t m = 0;
   for (std::int64_t x : v) m = std::max(m, static_cast<std::uint64_t>(x < 0 ? -x : x));
-  int len = 0;
-  while (len < 64 && (m >> len) != 0) ++len;
+  const int len = m == 0 ? 0 : 64 - __builtin_clzll(m);  // m's bit length
   const int s = std::max(0, len - bits);
   for (std::int64_t& x : v) x = x < 0 ? -((-x) >> s) : x >> s;
 }
@@ -191,13 +190,20 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
     }
   }
   // Each child's place in the order by (t_c, e_c, c), the ranking's last
-  // keys whatever the gap weight.
-  for (std::size_t c = 0; c < 8; ++c) {
-    int place = 0;
-    for (std::size_t o = 0; o < 8; ++o)
-      place += t[o] < t[c] || (t[o] == t[c] && (e[o] < e[c] || (e[o] == e[c] && o < c)));
-    tie_[c] = static_cast<std::uint8_t>(place);
-  }
+  // keys whatever the gap weight: the three packed into one integer (t_c
+  // < 2^49 above bit 64, e_c < 2^56 from bit 3, c in bits 0-2), each pair
+  // of children compared once, without branches.
+  std::array<UInt128, 8> packed{};
+  for (std::size_t c = 0; c < 8; ++c)
+    packed[c] = static_cast<UInt128>(t[c]) << 64 | static_cast<UInt128>(static_cast<std::uint64_t>(e[c]) << 3 | c);
+  std::array<int, 8> place{};
+  for (std::size_t c = 1; c < 8; ++c)
+    for (std::size_t o = 0; o < c; ++o) {
+      const int before = packed[o] < packed[c] ? 1 : 0;
+      place[c] += before;
+      place[o] += 1 - before;
+    }
+  for (std::size_t c = 0; c < 8; ++c) tie_[c] = static_cast<std::uint8_t>(place[c]);
   // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
   // the squared distance from the child's centre to its nearest neighbour.
   // t_c / (k |n|) is the child's distance to the plane, so both terms are
@@ -208,17 +214,21 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   // G = 0 and step_c = its decrease per unit of G.
   // Without `with_gaps` no ranking uses g_c: left 0, the far keys order as
   // (t, e, c), the ranking of spec 8A.8 without neighbours.
+  // Per point, the squared offsets along each axis of the children's two
+  // centre coordinates, (2X + bit)·h + h/2 for bit 0 and 1, then each
+  // child's sum of its three: the same integers, a third of the products.
   std::array<std::int64_t, 8> g{};  // 0 without neighbours beyond gap_from
-  for (std::size_t c = 0; c < 8 && with_gaps && gap_from < k; ++c) {
-    g[c] = INT64_MAX;
+  if (with_gaps && gap_from < k) {
+    g.fill(INT64_MAX);
     for (int i = gap_from; i < k; ++i) {
-      std::int64_t d2 = 0;
+      std::int64_t sq[3][2];
       for (std::size_t a = 0; a < 3; ++a) {
-        const std::int64_t bit = (c >> (2 - a)) & 1;
-        const std::int64_t u = (2 * std::int64_t{p[a]} + bit) * h + h / 2 - neighbours[i][a];
-        d2 += u * u;
+        const std::int64_t u = 2 * std::int64_t{p[a]} * h + h / 2 - neighbours[i][a];
+        sq[a][0] = u * u;
+        sq[a][1] = (u + h) * (u + h);
       }
-      g[c] = std::min(g[c], d2);
+      for (std::size_t c = 0; c < 8; ++c)
+        g[c] = std::min(g[c], sq[0][(c >> 2) & 1] + sq[1][(c >> 1) & 1] + sq[2][c & 1]);
     }
   }
   // Far ranking (spec 8A.8): the larger g_c first, then the place by (t, e,
