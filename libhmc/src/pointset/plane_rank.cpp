@@ -256,12 +256,16 @@ ChildKeys::UInt128 ChildKeys::key(unsigned first_mask, int gap, std::size_t c) c
 void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) const {
   std::array<UInt128, 8> keys{};
   for (std::size_t c = 0; c < 8; ++c) keys[c] = key(first_mask, gap, c);
-  // Insertion sort; the keys are distinct.
-  for (std::size_t c = 0; c < 8; ++c) {
-    std::size_t r = c;
-    for (; r > 0 && keys[static_cast<std::size_t>(order[r - 1])] > keys[c]; --r) order[r] = order[r - 1];
-    order[r] = static_cast<int>(c);
-  }
+  // Each child's rank, the number of smaller keys (they are distinct): each
+  // pair compared once, without branches.
+  std::array<int, 8> place{};
+  for (std::size_t c = 1; c < 8; ++c)
+    for (std::size_t o = 0; o < c; ++o) {
+      const int before = keys[o] < keys[c] ? 1 : 0;
+      place[c] += before;
+      place[o] += 1 - before;
+    }
+  for (std::size_t c = 0; c < 8; ++c) order[static_cast<std::size_t>(place[c])] = static_cast<int>(c);
 }
 
 std::uint8_t ChildKeys::symbol(unsigned first_mask, int gap, unsigned occupancy) const {
