@@ -765,6 +765,7 @@ TEST_CASE("base layer: coder 5 ranks the children of a volume's interior farthes
   ChildKeys(GridPoint{0, 0, 0}, 1, 3, nb, 3, true, 1).order(0u, kFarRanking, far);
   ChildKeys(GridPoint{0, 0, 0}, 1, 3, nb, 3, true, 1).order(0u, 0, plain);
   CHECK(far[0] == 6);
+  CHECK(far[1] == 7);
   CHECK(far != plain);
   // Weights above 16 are refused before any table is read.
   for (const std::uint32_t weight : {17u, 31u}) {
