@@ -412,10 +412,10 @@ bool choice_open(std::size_t g, std::uint8_t coder) {
 // themselves, the middle half ranked. An estimate (neighbours outside the
 // block are missed), so that the encoder does not rank every node of a
 // large depth to learn that ranking does not pay (a million random points:
-// 12 times the plain coder's time without it). Every ranking coder 3 may
-// choose (coder 2 unless `causal`), each judged by its symbols' entropy:
-// the best one decides (at the bunny's last depth the plane alone saves
-// 0.4 %, the quadric with gap weights 17 %).
+// 12 times the plain coder's time without it). Every ranking `coder` may
+// choose (choice_open), each judged by its symbols' entropy: the best one
+// decides (at the bunny's last depth the plane alone saves 0.4 %, the
+// quadric with gap weights 17 %).
 bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q,
                      std::uint8_t coder) {
   const bool causal = coder >= kCausalCoder;
