@@ -33,55 +33,58 @@ std::vector<std::uint8_t> huffman_lengths(const std::vector<std::uint64_t>& freq
   if (used.size() < 2) return len;
   if ((std::size_t{1} << max_len) < used.size()) fail(Status::internal_error, "alphabet too large for code length limit");
 
-  // Package-merge (Larmore & Hirschberg). Items are leaves or packages of
-  // two items of the previous list, kept in one pool; the 2n-2 lightest
-  // items of the final list give each leaf's code length: the number of
-  // times it occurs inside them.
+  // Package-merge (Larmore & Hirschberg). The list of level 1 is the
+  // leaves by weight; the list of level l + 1 merges the leaves with the
+  // packages of two consecutive items of level l's list. The 2n-2 lightest
+  // items of the last list give each leaf's code length: the number of times
+  // it occurs inside them. Packages enter a list in the order they were
+  // made, so the first k packages of level l + 1's list hold exactly the
+  // first 2k items of level l's: walking the levels back from the last, each
+  // level's selected items are a prefix, whose leaves count once each and
+  // whose packages set the next prefix.
   std::sort(used.begin(), used.end(), [&](std::uint32_t a, std::uint32_t b) {
     return freq[a] != freq[b] ? freq[a] < freq[b] : a < b;
   });
   const std::size_t n = used.size();
-  struct Item {
-    std::uint64_t weight;
-    std::uint32_t left, right;  // a leaf: left = right = its position in `used`
-  };
-  std::vector<Item> pool;
-  pool.reserve(n * static_cast<std::size_t>(max_len));
-  for (std::uint32_t i = 0; i < n; ++i) pool.push_back({freq[used[i]], i, i});
-  const auto leaf = [&](std::uint32_t item) { return item < n; };
-  std::vector<std::uint32_t> list(n), packages, merged;
-  std::iota(list.begin(), list.end(), 0u);
-  for (int level = 1; level < max_len; ++level) {
-    packages.clear();
-    for (std::size_t i = 0; i + 1 < list.size(); i += 2) {
-      packages.push_back(static_cast<std::uint32_t>(pool.size()));
-      pool.push_back({pool[list[i]].weight + pool[list[i + 1]].weight, list[i], list[i + 1]});
-    }
-    merged.clear();
-    std::uint32_t a = 0;
-    std::size_t b = 0;
-    while (a < n || b < packages.size()) {
+  const auto levels = static_cast<std::size_t>(max_len);
+  // Level l's list (l = 0 ... levels - 1) is items[l * 2n, l * 2n + size[l]):
+  // a leaf's position in `used`, or kPackage. weight, next: the weights of
+  // the list before and of the one being built.
+  constexpr std::uint32_t kPackage = ~std::uint32_t{0};
+  std::vector<std::uint32_t> items(levels * 2 * n);
+  std::vector<std::size_t> size(levels);
+  std::vector<std::uint64_t> weight(2 * n), next(2 * n);
+  for (std::uint32_t i = 0; i < n; ++i) items[i] = i, weight[i] = freq[used[i]];
+  size[0] = n;
+  for (std::size_t level = 1; level < levels; ++level) {
+    std::uint32_t* out = items.data() + level * 2 * n;
+    std::size_t m = 0, a = 0, b = 0;  // the next leaf; the next package, weight[2b] + weight[2b + 1]
+    const std::size_t packages = size[level - 1] / 2;
+    while (a < n || b < packages) {
       // Leaves go first on equal weight: deterministic and keeps codes short.
-      if (b >= packages.size() || (a < n && pool[a].weight <= pool[packages[b]].weight))
-        merged.push_back(a++);
-      else
-        merged.push_back(packages[b++]);
-    }
-    list.swap(merged);
-  }
-  std::vector<std::uint32_t> stack;
-  for (std::size_t i = 0; i < 2 * n - 2; ++i) {
-    stack.push_back(list[i]);
-    while (!stack.empty()) {
-      const std::uint32_t item = stack.back();
-      stack.pop_back();
-      if (leaf(item)) {
-        ++len[used[item]];
+      const std::uint64_t leaf = a < n ? freq[used[a]] : 0;
+      const std::uint64_t package = b < packages ? weight[2 * b] + weight[2 * b + 1] : 0;
+      if (b >= packages || (a < n && leaf <= package)) {
+        out[m] = static_cast<std::uint32_t>(a++);
+        next[m++] = leaf;
       } else {
-        stack.push_back(pool[item].left);
-        stack.push_back(pool[item].right);
+        out[m] = kPackage;
+        next[m++] = package;
+        ++b;
       }
     }
+    size[level] = m;
+    weight.swap(next);
+  }
+  std::size_t take = 2 * n - 2;
+  for (std::size_t level = levels; level-- > 0;) {
+    const std::uint32_t* in = items.data() + level * 2 * n;
+    std::size_t packages = 0;
+    for (std::size_t i = 0; i < take; ++i) {
+      if (in[i] == kPackage) ++packages;
+      else ++len[used[in[i]]];
+    }
+    take = 2 * packages;
   }
   return len;
 }
