@@ -31,6 +31,20 @@ const OccupancyOrder& occupancy_order() {
 namespace {
 
 __extension__ typedef __int128 Int128;
+__extension__ typedef unsigned __int128 UInt128;
+
+// The rank of each of eight distinct keys, the number of smaller ones: each
+// pair compared once, without branches.
+std::array<int, 8> ranks_of(const std::array<UInt128, 8>& keys) {
+  std::array<int, 8> rank{};
+  for (std::size_t c = 1; c < 8; ++c)
+    for (std::size_t o = 0; o < c; ++o) {
+      const int before = keys[o] < keys[c] ? 1 : 0;
+      rank[c] += before;
+      rank[o] += 1 - before;
+    }
+  return rank;
+}
 
 // sign(x) * floor(|x| / 2^s) for every value, with the smallest s that makes
 // all magnitudes fit in `bits` bits: keeps the products below exact.
@@ -191,18 +205,11 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   }
   // Each child's place in the order by (t_c, e_c, c), the ranking's last
   // keys whatever the gap weight: the three packed into one integer (t_c
-  // < 2^49 above bit 64, e_c < 2^56 from bit 3, c in bits 0-2), each pair
-  // of children compared once, without branches.
+  // < 2^49 above bit 64, e_c < 2^56 from bit 3, c in bits 0-2).
   std::array<UInt128, 8> packed{};
   for (std::size_t c = 0; c < 8; ++c)
     packed[c] = static_cast<UInt128>(t[c]) << 64 | static_cast<UInt128>(static_cast<std::uint64_t>(e[c]) << 3 | c);
-  std::array<int, 8> place{};
-  for (std::size_t c = 1; c < 8; ++c)
-    for (std::size_t o = 0; o < c; ++o) {
-      const int before = packed[o] < packed[c] ? 1 : 0;
-      place[c] += before;
-      place[o] += 1 - before;
-    }
+  const std::array<int, 8> place = ranks_of(packed);
   for (std::size_t c = 0; c < 8; ++c) tie_[c] = static_cast<std::uint8_t>(place[c]);
   // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
   // the squared distance from the child's centre to its nearest neighbour.
@@ -256,15 +263,7 @@ ChildKeys::UInt128 ChildKeys::key(unsigned first_mask, int gap, std::size_t c) c
 void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) const {
   std::array<UInt128, 8> keys{};
   for (std::size_t c = 0; c < 8; ++c) keys[c] = key(first_mask, gap, c);
-  // Each child's rank, the number of smaller keys (they are distinct): each
-  // pair compared once, without branches.
-  std::array<int, 8> place{};
-  for (std::size_t c = 1; c < 8; ++c)
-    for (std::size_t o = 0; o < c; ++o) {
-      const int before = keys[o] < keys[c] ? 1 : 0;
-      place[c] += before;
-      place[o] += 1 - before;
-    }
+  const std::array<int, 8> place = ranks_of(keys);  // the keys are distinct
   for (std::size_t c = 0; c < 8; ++c) order[static_cast<std::size_t>(place[c])] = static_cast<int>(c);
 }
 
