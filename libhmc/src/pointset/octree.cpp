@@ -318,7 +318,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
                                        const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked,
                                        const std::vector<int>& gaps, const std::vector<bool>& quadric, bool causal,
                                        int neighbours, bool pairing, bool& paired, bool wide = false) {
-  const unsigned weight_bits = wide ? 5u : 4u;
+  const int weight_bits = wide ? kFarWeightBits : 4;
   any_ranked = false;
   std::vector<bool> ranked(static_cast<std::size_t>(q), false);
   // Per depth, its tables' symbol sequences in node order (one table at a
@@ -338,8 +338,8 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
       context_bits.push_back(table_and_symbols(f, HuffmanCode::from_frequencies(two_symbols_at_least(f))));
     // Rank only where it pays for the decoder's searches: 2% of the depth
     // (the depth's weight, and quadric flag, included).
-    const std::uint64_t ranked_bits =
-        std::accumulate(context_bits.begin(), context_bits.end(), std::uint64_t{weight_bits + (causal ? 1u : 0u)});
+    const auto header = static_cast<std::uint64_t>(weight_bits + (causal ? 1 : 0));
+    const std::uint64_t ranked_bits = std::accumulate(context_bits.begin(), context_bits.end(), header);
     const bool use = !ranked_sym[sd].empty() && 100 * ranked_bits < 98 * plain_bits;
     table_bits[sd] = use ? std::move(context_bits) : std::vector<std::uint64_t>{plain_bits};
     ranked[sd] = use;
@@ -378,7 +378,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     w.put(ranked[sd] ? 1 : 0, 1);
-    if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), static_cast<int>(weight_bits));
+    if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), weight_bits);
     if (ranked[sd] && causal) w.put(quadric[sd] ? 1 : 0, 1);
     for (std::size_t j = 0; j < seqs[sd].size(); ++j) {
       codes[sd].push_back(
@@ -625,7 +625,7 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
   const bool causal = coder >= kCausalCoder, flagged = coder >= kPairedCoder;
-  const int weight_bits = coder == kFarCoder ? 5 : 4;  // coder 5: 0-15 and kFarRanking (spec 8.6)
+  const int weight_bits = coder == kFarCoder ? kFarWeightBits : 4;  // coder 5: 0-15 and kFarRanking (spec 8.6)
   std::vector<std::vector<TableCode>> codes(static_cast<std::size_t>(q));
   std::vector<bool> ranked;
   std::vector<int> gaps(static_cast<std::size_t>(q), 0);

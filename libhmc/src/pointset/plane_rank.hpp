@@ -53,6 +53,9 @@ inline constexpr int kMaxRankPoints = 32;
 /// children farthest from the nearest neighbour first, the plane (or
 /// quadric) and centroid distances only breaking ties.
 inline constexpr int kFarRanking = 16;
+/// The width of the weight fields that can hold it (BASE coder 5, REFN
+/// coder 7; the coders before them have 4-bit weights, 0 to 15).
+inline constexpr int kFarWeightBits = 5;
 
 /// The keys that rank a node's children (spec 8A.1 steps 2–4, and 8A.4's
 /// distances to the nearest neighbour when `with_gaps`), computed once so

@@ -23,7 +23,6 @@ constexpr int kQuadricNeighbours = 10;    // the encoder's quadric fit (coder 5)
 constexpr int kFarNeighbours = 8;         // the encoder's second try of far ranking (coder 7)
 constexpr int kMaxClasses = 4;            // 2-bit header field
 constexpr int kMaxGap = 15;               // 4-bit header field of coder 3
-constexpr int kFarWeightBits = 5;         // coder 7's weight fields: 0-15 and kFarRanking
 constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
 const char* const kWhat = "refinement layer";
 
