@@ -112,6 +112,30 @@ TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each,
   CHECK(r.err.find("--rebuild") != std::string::npos);
 }
 
+TEST_CASE("dec --all-levels writes a volume's tetrahedra as VTK unless --ext says otherwise") {
+  const auto dir = testgen::temp_dir("cli_all_levels_volume");
+  REQUIRE(io::write_mesh(dir + "/ball.xyz", samples::random_ball(400, 5)).ok());
+  auto r = hmc_run(dir, "enc " + q(dir + "/ball.xyz") + " -o " + q(dir + "/v.hmc") + " --kind volume --levels 2");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  r = hmc_run(dir, "dec " + q(dir + "/v.hmc") + " --all-levels " + q(dir + "/all"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  for (const char* level : {"level-0.vtk", "level-1.vtk"}) {
+    auto m = io::read_mesh(dir + "/all/" + level);
+    REQUIRE_MESSAGE(m.ok(), level);
+    CHECK_FALSE(m.value().tetrahedra.empty());
+  }
+  CHECK_FALSE(std::filesystem::exists(dir + "/all/level-0.ply"));
+  // Points alone still go to PLY; an explicit PLY for tetrahedra is refused
+  // as a usage error and leaves nothing behind.
+  r = hmc_run(dir, "dec " + q(dir + "/v.hmc") + " --points-only --all-levels " + q(dir + "/pts"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(std::filesystem::exists(dir + "/pts/level-0.ply"));
+  r = hmc_run(dir, "dec " + q(dir + "/v.hmc") + " --all-levels " + q(dir + "/bad") + " --ext ply");
+  CHECK(r.code == 1);
+  CHECK(r.err.find("tetrahedra") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir + "/bad"));
+}
+
 TEST_CASE("dec writes binary coordinates as float32 only when that keeps the grid") {
   const auto dir = testgen::temp_dir("cli_coords");
   auto coords_of = [&](const std::string& ply) {

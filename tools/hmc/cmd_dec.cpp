@@ -116,7 +116,11 @@ int cmd_dec(int argc, char** argv) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) return report("cannot create " + dir, Error{Status::io_error, ec.message()}, Stage::output);
-    const std::string ext = a.get("--ext", "ply");
+    // PLY cannot hold tetrahedra: a volume's rebuilt levels default to
+    // legacy VTK, everything else (surfaces, point sets) to PLY.
+    bool tets = false;
+    for (const auto& level : d.levels) tets = tets || !level.tetrahedra.empty();
+    const std::string ext = a.get("--ext", tets ? "vtk" : "ply");
     for (const auto& level : d.levels) {
       const std::string path = (std::filesystem::path(dir) / ("level-" + std::to_string(level.lod) + "." + ext)).string();
       const Mesh m = level_mesh(d, level);
