@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/format.hpp"
 #include "codec/stream_decoder.hpp"
 #include "container/container.hpp"
 #include "hmc/codec.hpp"
@@ -354,6 +355,124 @@ TEST_CASE("several defects: at once in stream order, or exactly what decode() re
   CHECK(streamed(bad_magic.data(), bad_magic.size(), one, small, nullptr, Order::whole).status ==
         Status::limit_exceeded);
   CHECK(streamed(bad_magic.data(), bad_magic.size(), one, small).status == Status::bad_magic);
+}
+
+TEST_CASE("decode() on two threads: the same levels, simplices and errors as on one") {
+  // Damaged content with valid CRCs (so that the chunks reach the decoder):
+  // byte flips in one layer or side-information chunk, alone and together
+  // with one in a later chunk, so that a reconstruction running on the
+  // second thread and the main thread's next chunk can both fail; the error
+  // reported must be the one the single-threaded decoder meets first.
+  auto fix_crc = [](Bytes& b, std::size_t at) {
+    const std::uint32_t len = std::uint32_t{b[at + 4]} | std::uint32_t{b[at + 5]} << 8 |
+                              std::uint32_t{b[at + 6]} << 16 | std::uint32_t{b[at + 7]} << 24;
+    const detail::ChunkType type{static_cast<char>(b[at]), static_cast<char>(b[at + 1]), static_cast<char>(b[at + 2]),
+                                 static_cast<char>(b[at + 3])};
+    const std::uint32_t crc = detail::chunk_crc(type, b.data() + at + 8, len);
+    for (int k = 0; k < 4; ++k) b[at + 8 + len + k] = static_cast<std::uint8_t>(crc >> (8 * k));
+  };
+  auto is_level_chunk = [](const Bytes& b, std::size_t at) {
+    const std::string type(reinterpret_cast<const char*>(b.data() + at), 4);
+    return type == "BASE" || type == "REFN" || type == "RCON";
+  };
+  DecodeOptions one, two;
+  two.threads = 2;
+  std::size_t errors = 0, rebuilt = 0;
+  for (const auto& s : samples_of_each_kind()) {
+    CAPTURE(s.name);
+    const Bytes& good = s.bytes;
+    const Outcome ref = whole(good.data(), good.size(), one);
+    REQUIRE(ref.status == Status::ok);
+    check_same(whole(good.data(), good.size(), two), ref);
+    for (const auto& l : ref.decoded.levels) rebuilt += l.rebuilt && (!l.triangles.empty() || !l.tetrahedra.empty());
+    // Cut at every chunk boundary: the levels complete by then.
+    for (std::size_t n : chunk_boundaries(good)) {
+      CAPTURE(n);
+      check_same(whole(good.data(), n, two), whole(good.data(), n, one));
+    }
+    std::vector<std::size_t> chunks;
+    for (std::size_t c : chunk_boundaries(good))
+      if (c + 12 <= good.size() && is_level_chunk(good, c)) chunks.push_back(c);
+    std::mt19937_64 rng(17);
+    for (std::size_t i = 0; i < chunks.size(); ++i) {
+      for (int trial = 0; trial < 6; ++trial) {
+        Bytes b = good;
+        auto damage = [&](std::size_t at) {
+          const std::uint32_t len = std::uint32_t{b[at + 4]} | std::uint32_t{b[at + 5]} << 8 |
+                                    std::uint32_t{b[at + 6]} << 16 | std::uint32_t{b[at + 7]} << 24;
+          if (len == 0) return;
+          const std::size_t pos = at + 8 + std::uniform_int_distribution<std::size_t>(0, len - 1)(rng);
+          b[pos] = static_cast<std::uint8_t>(b[pos] ^ (1u << std::uniform_int_distribution<int>(0, 7)(rng)));
+          fix_crc(b, at);
+        };
+        damage(chunks[i]);
+        if (trial % 2 == 1 && i + 1 < chunks.size()) damage(chunks[i + 1 + rng() % (chunks.size() - i - 1)]);
+        CAPTURE(chunks[i]);
+        CAPTURE(trial);
+        const Outcome a = whole(b.data(), b.size(), one);
+        errors += a.status != Status::ok;
+        check_same(whole(b.data(), b.size(), two), a);
+      }
+    }
+  }
+  // The comparisons above covered rebuilt levels and failures.
+  CHECK(rebuilt >= 8);
+  CHECK(errors >= 10);
+
+  // An error only the reconstruction can find (spec 10: a toggled
+  // tetrahedron that does not exist) in the coarsest level, then one in the
+  // next layer (an unknown coder) that the main thread meets while that
+  // reconstruction may still run: the first is reported, as on one thread.
+  const Bytes& good = samples_of_each_kind()[1].bytes;  // surface, 4 levels
+  const Outcome ref = whole(good.data(), good.size(), one);
+  REQUIRE(ref.status == Status::ok);
+  std::vector<std::size_t> rcon, refn;
+  for (std::size_t c : chunk_boundaries(good)) {
+    if (c + 12 > good.size()) continue;
+    const std::string type(reinterpret_cast<const char*>(good.data() + c), 4);
+    if (type == "RCON") rcon.push_back(c);
+    if (type == "REFN") refn.push_back(c);
+  }
+  REQUIRE(rcon.size() == 4);
+  REQUIRE(refn.size() == 3);
+  const std::size_t r = rcon[0];
+  const std::uint32_t len = std::uint32_t{good[r + 4]} | std::uint32_t{good[r + 5]} << 8 |
+                            std::uint32_t{good[r + 6]} << 16 | std::uint32_t{good[r + 7]} << 24;
+  detail::ChunkView view{detail::chunk_type("RCON"), r, len, good.data() + r + 8};
+  detail::ReconParams p = detail::read_recon(view, ref.decoded.levels[0].points.size());
+  p.compact = false;
+  p.candidate_contexts = p.vertex_contexts = false;
+  p.toggle_ranks = {};
+  p.toggles = {1u << 30};
+  const auto payload = detail::write_recon(p);
+  Bytes bad(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(r));
+  const auto n = static_cast<std::uint32_t>(payload.size());
+  for (std::uint8_t x : {std::uint8_t{'R'}, std::uint8_t{'C'}, std::uint8_t{'O'}, std::uint8_t{'N'},
+                         static_cast<std::uint8_t>(n), static_cast<std::uint8_t>(n >> 8),
+                         static_cast<std::uint8_t>(n >> 16), static_cast<std::uint8_t>(n >> 24)})
+    bad.push_back(x);
+  bad.insert(bad.end(), payload.begin(), payload.end());
+  bad.insert(bad.end(), 4, 0);
+  fix_crc(bad, r);
+  const std::size_t next = bad.size();  // the first REFN follows
+  bad.insert(bad.end(), good.begin() + static_cast<std::ptrdiff_t>(r + 12 + len), good.end());
+  REQUIRE(std::string(reinterpret_cast<const char*>(bad.data() + next), 4) == "REFN");
+  const Outcome toggle = whole(bad.data(), bad.size(), one);
+  REQUIRE(toggle.status == Status::bad_layer);
+  CHECK(toggle.message.find("toggled tetrahedron") != std::string::npos);
+  check_same(whole(bad.data(), bad.size(), two), toggle);
+  Bytes both = bad;
+  both[next + 8] = 99;  // REFN coder
+  fix_crc(both, next);
+  check_same(whole(both.data(), both.size(), one), toggle);
+  check_same(whole(both.data(), both.size(), two), toggle);
+  // The later error alone, for contrast.
+  Bytes later = good;
+  later[refn[0] + 8] = 99;
+  fix_crc(later, refn[0]);
+  const Outcome coder = whole(later.data(), later.size(), one);
+  CHECK(coder.message.find("unknown coder") != std::string::npos);
+  check_same(whole(later.data(), later.size(), two), coder);
 }
 
 TEST_CASE("limits apply to streams fed in pieces") {

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <thread>
 
 #include <unistd.h>
 
@@ -40,7 +41,7 @@ bool float32_keeps_grid(const Mesh& m, double step) {
 int cmd_dec(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--points-only"},
          {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels", "--max-memory",
-          "--coords", "--rebuild"});
+          "--coords", "--rebuild", "--threads"});
   DecodeOptions opt;
   opt.finest_level = static_cast<int>(a.get_int("--level", 0, 0, 63));
   opt.limits.max_points = static_cast<std::uint64_t>(
@@ -50,6 +51,10 @@ int cmd_dec(int argc, char** argv) {
                               "--max-memory", static_cast<long long>(opt.limits.max_memory >> 20), 1, 1ll << 30))
                           << 20;
   opt.reconstruct = !a.flag("--points-only");
+  // Two threads where the machine has them: each level's reconstruction
+  // overlaps the next level's decoding (the output is the same).
+  opt.threads = static_cast<unsigned>(
+      a.get_int("--threads", std::thread::hardware_concurrency() >= 2 ? 2 : 1, 1, 1024));
   // Rebuild what is written or shown: one output file needs one level's
   // connectivity, so the coarser levels' reconstructions (more than half
   // the work of a multi-level stream) are skipped; the summary table and
@@ -71,7 +76,7 @@ int cmd_dec(int argc, char** argv) {
     std::fprintf(stderr,
                  "hmc dec: %s\nusage: hmc dec IN.hmc [-o OUT] [--level K] [--all-levels DIR [--ext EXT]] [--canonical DIR]\n"
                  "                  [--coords auto|float|double] [--rebuild all|finest] [--points-only] [--max-points N]\n"
-                 "                  [--max-levels N] [--max-memory MIB] [--json]\n",
+                 "                  [--max-levels N] [--max-memory MIB] [--threads N] [--json]\n",
                  a.ok() ? "need one input stream" : a.error().c_str());
     return kUsage;
   }

@@ -61,6 +61,8 @@ const char* kUsage =
     "      --points-only       decode points only: no reconstruction (RCON is still checked)\n"
     "      --max-points N      refuse streams with more points (default 67108864)\n"
     "      --max-memory MIB    refuse levels needing more working memory (default 2048 MiB)\n"
+    "      --threads N         1: decode on one thread; 2 or more (default where the machine has two):\n"
+    "                          each level's reconstruction overlaps the next level's decoding\n"
     "      --json              print a summary as JSON\n"
     "  info IN.hmc         list chunks and levels [--json]\n"
     "  quality MESH        element quality (thesis 3.5): triangle angle and edge ratio, QT1-QT4 [--json]\n"

@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
+#include <exception>
+#include <future>
+#include <memory>
 #include <optional>
 #include <string>
+#include <system_error>
 
 #include "codec/format.hpp"
 #include "codec/stream_decoder.hpp"
@@ -146,8 +150,9 @@ struct ChunkDecoder::State {
   std::uint64_t memory = 0;                // bytes counted against limits.max_memory by the kept levels
   // The last reconstructed level's tetrahedralization, kept while a finer
   // level may follow: that level's is built from it (delaunay_refine),
-  // inserting only the added points. Counted in `memory` while kept.
-  std::optional<Tetrahedralization> previous_dt;
+  // inserting only the added points. Counted in `memory` while kept. Shared
+  // with the reconstruction in flight, if any (read-only on both sides).
+  std::shared_ptr<Tetrahedralization> previous_dt;
   std::uint64_t previous_dt_bytes = 0;
   // The last decoded level's border (resolved; indices of its points),
   // which the next level's RCON may inherit (flag bit 3).
@@ -159,8 +164,52 @@ struct ChunkDecoder::State {
 
   // Rebuild `level`'s connectivity from its side information. `coarser` is
   // the level decoded before it, if any: when its tetrahedralization was
-  // kept, this one is built from it.
-  void rebuild(DecodedLevel& level, const ReconParams& params, Kind kind, const DecodedLevel* coarser);
+  // kept, this one is built from it. `index`: the level's place in
+  // out.levels once it is there (it may still be `pending`), where a
+  // reconstruction put in flight is stored.
+  void rebuild(DecodedLevel& level, const ReconParams& params, Kind kind, const DecodedLevel* coarser,
+               std::size_t index);
+
+  // DecodeOptions::threads > 1 in decode() (set_overlap()): the
+  // reconstruction proper (spec 11, after the tetrahedralization) of a level
+  // runs on a second thread while this one decodes the next level's points
+  // and tetrahedralization; at most one is in flight. It reads only what it
+  // owns or shares read-only (its points, its tetrahedralization, its side
+  // information) and its result is stored by join(), on this thread, so the
+  // output is the one of a sequential decode.
+  bool overlap = false;
+  struct InFlight {
+    std::size_t index;    // in out.levels
+    std::future<Reconstruction> result;
+  };
+  std::optional<InFlight> in_flight;  // the worker owns (shares) what it reads; waited for on destruction
+  void store(DecodedLevel& level, Reconstruction&& rec) {
+    level.triangles = std::move(rec.triangles);
+    level.tetrahedra = std::move(rec.tetrahedra);
+    level.rebuilt = true;
+    memory += (level.triangles.size() + level.tetrahedra.size()) * kSimplexBytes;
+  }
+  // Waits for the reconstruction in flight and stores it; rethrows its error.
+  void join() {
+    if (!in_flight) return;
+    InFlight f = std::move(*in_flight);
+    in_flight.reset();
+    store(out.levels[f.index], f.result.get());
+  }
+  // After an error on this thread: a reconstruction in flight belongs to an
+  // earlier level, so its error, if any, is the one a sequential decode
+  // would have met first.
+  [[noreturn]] void join_and_rethrow(std::exception_ptr error) {
+    if (in_flight) {
+      InFlight f = std::move(*in_flight);
+      in_flight.reset();
+      f.result.get();  // throws the earlier error, if any
+    }
+    std::rethrow_exception(error);
+  }
+  ~State() {
+    if (in_flight) in_flight->result.wait();
+  }
 
   // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
   // The kept tetrahedralization only saves time: it goes first, so that no
@@ -180,31 +229,54 @@ struct ChunkDecoder::State {
 };
 
 void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params, Kind kind,
-                                  const DecodedLevel* coarser) {
+                                  const DecodedLevel* coarser, std::size_t index) {
   if (options.progress) options.progress(level.lod, true);
   const std::uint64_t n = level.points.size();
   const std::string what =
       "the reconstruction of level " + std::to_string(level.lod) + " (" + std::to_string(n) + " points)";
-  std::optional<Tetrahedralization> coarse = std::move(previous_dt);
+  std::shared_ptr<Tetrahedralization> coarse = std::move(previous_dt);
   previous_dt.reset();
-  memory -= previous_dt_bytes;
+  // A reconstruction in flight still reads `coarse`: its bytes stay counted
+  // until it is joined.
+  const std::uint64_t coarse_bytes = previous_dt_bytes;
   previous_dt_bytes = 0;
+  if (in_flight && in_flight->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) join();
+  if (!in_flight) memory -= coarse_bytes;
   reserve(n * kPointBytes, what);
   const std::uint64_t room = options.limits.max_memory - memory - n * kPointBytes;
   // The previous level is the coarser one, and its points a subset.
-  Tetrahedralization dt = coarse && coarser && coarser->lod == level.lod + 1
-                              ? delaunay_refine(level.points, coarser->points, std::move(*coarse), room / kTetBytes)
-                              : delaunay(level.points, room / kTetBytes);
-  coarse.reset();
-  auto rec = reconstruct(level.points, dt, kind, params);
-  level.triangles = std::move(rec.triangles);
-  level.tetrahedra = std::move(rec.tetrahedra);
-  level.rebuilt = true;
-  memory += (level.triangles.size() + level.tetrahedra.size()) * kSimplexBytes;
+  Tetrahedralization dt;
+  if (coarse && coarser && coarser->lod == level.lod + 1) {
+    // Handed over, or copied while the reconstruction in flight reads it.
+    Tetrahedralization sub = in_flight ? *coarse : std::move(*coarse);
+    coarse.reset();
+    dt = delaunay_refine(level.points, coarser->points, std::move(sub), room / kTetBytes);
+  } else {
+    coarse.reset();
+    dt = delaunay(level.points, room / kTetBytes);
+  }
+  if (in_flight) {
+    join();
+    memory -= coarse_bytes;
+  }
   const std::uint64_t keep = dt.tets.size() * 2 * sizeof(dt.tets[0]);
   const std::uint64_t max = options.limits.max_memory;
+  auto shared = std::make_shared<Tetrahedralization>(std::move(dt));
+  if (overlap) {
+    // The points are copied: the level moves into out.levels meanwhile.
+    auto points = std::make_shared<const std::vector<GridPoint>>(level.points);
+    std::shared_ptr<const Tetrahedralization> tets = shared;
+    try {
+      in_flight = InFlight{index, std::async(std::launch::async, [points, tets, kind, params] {
+                                    return reconstruct(*points, *tets, kind, params);
+                                  })};
+    } catch (const std::system_error&) {
+      // No thread to be had: reconstruct here, as with one thread.
+    }
+  }
+  if (!in_flight) store(level, reconstruct(level.points, *shared, kind, params));
   if (level.lod > std::max(options.finest_level, 0) && memory <= max && keep <= max - memory) {
-    previous_dt = std::move(dt);
+    previous_dt = std::move(shared);
     previous_dt_bytes = keep;
     memory += keep;
   }
@@ -218,7 +290,7 @@ void ChunkDecoder::set_version(std::uint8_t major, std::uint8_t minor) {
   s_->out.version_minor = minor;
 }
 
-bool ChunkDecoder::chunk(const ChunkView& c) {
+bool ChunkDecoder::chunk_impl(const ChunkView& c) {
   const DecodeOptions& options = s_->options;
   ChunkWalker& walk = s_->walk;
   Decoded& out = s_->out;
@@ -294,7 +366,7 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
         s_->previous_border = params.border;
         // The requested level is the last one decoded; any other may be put off.
         if (options.rebuild_coarser_levels || pending->lod <= options.finest_level)
-          s_->rebuild(*pending, params, walk.header->kind, coarser);
+          s_->rebuild(*pending, params, walk.header->kind, coarser, out.levels.size());
         else
           s_->deferred = std::move(params);
       }
@@ -309,7 +381,25 @@ bool ChunkDecoder::chunk(const ChunkView& c) {
   return out.levels.size() > levels_before;
 }
 
+bool ChunkDecoder::chunk(const ChunkView& c) {
+  try {
+    return chunk_impl(c);
+  } catch (...) {
+    s_->join_and_rethrow(std::current_exception());
+  }
+}
+
 void ChunkDecoder::finish(const ContainerView& view) {
+  try {
+    s_->join();
+    finish_impl(view);
+    s_->join();
+  } catch (...) {
+    s_->join_and_rethrow(std::current_exception());
+  }
+}
+
+void ChunkDecoder::finish_impl(const ContainerView& view) {
   const DecodeOptions& options = s_->options;
   const ChunkWalker& walk = s_->walk;
   Decoded& out = s_->out;
@@ -317,7 +407,7 @@ void ChunkDecoder::finish(const ContainerView& view) {
   // when no finer level followed it.
   if (s_->deferred && !out.levels.empty()) {
     const std::size_t k = out.levels.size();
-    s_->rebuild(out.levels.back(), *s_->deferred, walk.header->kind, k > 1 ? &out.levels[k - 2] : nullptr);
+    s_->rebuild(out.levels.back(), *s_->deferred, walk.header->kind, k > 1 ? &out.levels[k - 2] : nullptr, k - 1);
     s_->deferred.reset();
   }
   if (!walk.end_seen) {
@@ -332,7 +422,11 @@ void ChunkDecoder::finish(const ContainerView& view) {
 }
 
 const Decoded& ChunkDecoder::result() const { return s_->out; }
-Decoded ChunkDecoder::take() { return std::move(s_->out); }
+Decoded ChunkDecoder::take() {
+  s_->join();
+  return std::move(s_->out);
+}
+void ChunkDecoder::set_overlap(bool on) { s_->overlap = on; }
 bool ChunkDecoder::header_ready() const { return s_->walk.header && s_->walk.quantizer; }
 bool ChunkDecoder::ended() const { return s_->walk.end_seen; }
 
@@ -342,6 +436,7 @@ Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOpti
   check_size(size, options.limits);
   const ContainerView view = parse_container(data, size, kEnd);
   ChunkDecoder decoder(options);
+  decoder.set_overlap(options.threads > 1);
   decoder.set_version(view.major, view.minor);
   for (const ChunkView& c : view.chunks) decoder.chunk(c);
   decoder.finish(view);

@@ -67,13 +67,21 @@ class ChunkDecoder {
 
   /// What is decoded so far (levels coarsest first).
   const Decoded& result() const;
+  /// The result, once every reconstruction has finished.
   Decoded take();
+  /// Reconstruct each level on a second thread while the next chunks are
+  /// decoded (DecodeOptions::threads). A completed level's connectivity is
+  /// then in place only after the next chunk() or finish(), so only the
+  /// whole-buffer decode() turns it on; the default is off.
+  void set_overlap(bool on);
   /// HEAD and SQNT have been read (kind, quantizer and declared levels are known).
   bool header_ready() const;
   /// HEND has been read.
   bool ended() const;
 
  private:
+  bool chunk_impl(const ChunkView& c);
+  void finish_impl(const ContainerView& tail);
   struct State;
   std::unique_ptr<State> s_;
 };
