@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <set>
 
 #include "codec/format.hpp"
@@ -107,6 +108,43 @@ TEST_CASE("the stream codes the set: input order does not change a byte") {
   samples::Rng rng(3);
   std::shuffle(m.points.begin(), m.points.end(), rng);
   CHECK(encode(m).value().bytes == a);
+}
+
+TEST_CASE("encoding on two threads writes the same stream and reports the same levels as on one") {
+  struct Case {
+    const char* name;
+    Mesh mesh;
+    std::optional<Kind> kind;
+    int levels;
+    bool fast;
+  };
+  const Case cases[] = {
+      {"torus surface, 4 levels", samples::torus(48, 20), std::nullopt, 4, false},
+      {"open surface, 3 levels", samples::height_field(20, 0.15), std::nullopt, 3, false},
+      {"volume, 3 levels", samples::random_ball(700, 4), Kind::volume, 3, false},
+      {"points, 3 levels", samples::random_ball(900, 6), Kind::points, 3, false},
+      {"torus surface, 3 levels, plain octrees", samples::torus(40, 16), std::nullopt, 3, true},
+      {"torus surface, 1 level", samples::torus(40, 16), std::nullopt, 1, false},
+  };
+  for (const auto& c : cases) {
+    CAPTURE(c.name);
+    EncodeOptions o;
+    o.kind = c.kind;
+    o.levels = c.levels;
+    o.fast_decode = c.fast;
+    const auto one = encode(c.mesh, o);
+    REQUIRE(one.ok());
+    o.threads = 2;
+    const auto two = encode(c.mesh, o);
+    REQUIRE(two.ok());
+    CHECK(two.value().bytes == one.value().bytes);
+    REQUIRE(two.value().report.levels.size() == one.value().report.levels.size());
+    CHECK(static_cast<int>(one.value().report.levels.size()) == c.levels);
+    for (std::size_t i = 0; i < one.value().report.levels.size(); ++i) {
+      CHECK(two.value().report.levels[i].layer_bytes == one.value().report.levels[i].layer_bytes);
+      CHECK(two.value().report.levels[i].coder == one.value().report.levels[i].coder);
+    }
+  }
 }
 
 TEST_CASE("duplicates before quantization are merged and counted") {

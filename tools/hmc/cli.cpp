@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <thread>
 #include <algorithm>
 
 #include "hmc/meshio.hpp"
@@ -108,6 +109,10 @@ Outputs::~Outputs() {
 bool exists(const std::string& path) {
   std::error_code ec;
   return fs::exists(path, ec);
+}
+
+unsigned threads_option(Args& a) {
+  return static_cast<unsigned>(a.get_int("--threads", std::thread::hardware_concurrency() >= 2 ? 2 : 1, 1, 1024));
 }
 
 std::string json_escape(const std::string& s) {

@@ -78,6 +78,11 @@ class Outputs {
 /// True if `path` exists (file or directory).
 bool exists(const std::string& path);
 
+/// `--threads N` for enc and dec (EncodeOptions/DecodeOptions::threads):
+/// by default 2 where the machine has two hardware threads, else 1; the
+/// output is the same either way.
+unsigned threads_option(Args& a);
+
 /// A tiny JSON writer producing one object, keys in insertion order.
 class Json {
  public:

@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <thread>
 
 #include <unistd.h>
 
@@ -51,10 +50,8 @@ int cmd_dec(int argc, char** argv) {
                               "--max-memory", static_cast<long long>(opt.limits.max_memory >> 20), 1, 1ll << 30))
                           << 20;
   opt.reconstruct = !a.flag("--points-only");
-  // Two threads where the machine has them: each level's reconstruction
-  // overlaps the next level's decoding (the output is the same).
-  opt.threads = static_cast<unsigned>(
-      a.get_int("--threads", std::thread::hardware_concurrency() >= 2 ? 2 : 1, 1, 1024));
+  // Each level's reconstruction overlaps the next level's decoding.
+  opt.threads = threads_option(a);
   // Rebuild what is written or shown: one output file needs one level's
   // connectivity, so the coarser levels' reconstructions (more than half
   // the work of a multi-level stream) are skipped; the summary table and

@@ -29,7 +29,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode"},
          {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio",
-          "--boundary", "--optimizer", "--vq-bits", "--vq-residual"});
+          "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
   bool kind_ok = true;
@@ -40,6 +40,7 @@ int cmd_enc(int argc, char** argv) {
   }
   opt.write_info = !a.flag("--no-info");
   opt.fast_decode = a.flag("--fast-decode");
+  opt.threads = threads_option(a);
   opt.levels = static_cast<int>(a.get_int("--levels", 1, 1, 64));
   opt.vq_bits = static_cast<int>(a.get_int("--vq-bits", 0, 0, 10));
   opt.vq_residual = static_cast<std::uint32_t>(a.get_int("--vq-residual", 0, 0, (1 << 21) - 1));

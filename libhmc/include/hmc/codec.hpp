@@ -128,8 +128,15 @@ struct EncodeOptions {
   /// REFN coder 1) search nothing anyway.
   bool fast_decode = false;
   /// Called as the encoder advances: the level being planned (0 = finest)
-  /// and the share of the work done, 0 to 1. It must not throw.
+  /// and the share of the work done, 0 to 1. It must not throw (it is
+  /// called on the caller's thread).
   std::function<void(int level, double done)> progress = nullptr;
+  /// Threads encode() may use, counting the caller's. With 2 or more (more
+  /// are not used), the point layers are coded on a second thread as soon
+  /// as their levels are known, beside the planning of the coarser levels,
+  /// and the winding numbers that tell which tetrahedra lie inside the
+  /// input are computed in two halves. The stream is the same.
+  unsigned threads = 1;
 };
 
 /// Per-level figures of an encoded or decoded stream.

@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
 #include <cmath>
+#include <future>
+#include <map>
 #include <string>
+#include <system_error>
 #include <unordered_map>
 
 #include "codec/format.hpp"
@@ -387,6 +390,47 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
   return vq_used ? vq : VectorQuantizer{};
 }
 
+// With EncodeOptions::threads > 1, the point layers are coded on a second
+// thread as soon as their two levels are known (a refinement layer once its
+// level is decimated, the base layer when the coarsest level's planning
+// starts), beside the planning of the coarser levels, which is most of the
+// work. At most one job runs at a time; each gives the bytes the same call
+// gives on the caller's thread, and an error it meets is rethrown by take().
+class LayerJobs {
+ public:
+  explicit LayerJobs(bool on) : on_(on) {}
+  LayerJobs(const LayerJobs&) = delete;
+  LayerJobs& operator=(const LayerJobs&) = delete;
+  ~LayerJobs() {
+    for (auto& [index, job] : jobs_) job.wait();
+  }
+  // Starts job `index` once the previous one has finished (without a thread
+  // to be had, take() finds nothing and the caller codes the layer itself).
+  template <class Job>
+  void start(std::size_t index, Job job) {
+    if (!on_) return;
+    if (auto it = jobs_.find(last_); it != jobs_.end()) it->second.wait();
+    try {
+      jobs_[index] = std::async(std::launch::async, std::move(job));
+      last_ = index;
+    } catch (const std::system_error&) {
+      jobs_.erase(index);
+    }
+  }
+  std::optional<RefinementLayer> take(std::size_t index) {
+    auto it = jobs_.find(index);
+    if (it == jobs_.end()) return std::nullopt;
+    auto job = std::move(it->second);
+    jobs_.erase(it);
+    return job.get();
+  }
+
+ private:
+  bool on_;
+  std::size_t last_ = ~std::size_t{0};
+  std::map<std::size_t, std::future<RefinementLayer>> jobs_;
+};
+
 Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   check_connectivity(input);
   if (options.vq_bits < 0 || options.vq_bits > kMaxVqBits)
@@ -429,6 +473,9 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     if (options.progress) options.progress(level, std::min(1.0, (work_done + share) / work_total));
   };
   WindingCache winding;  // the input surface's winding numbers, from one level to the next
+  winding.threads = options.threads;
+  LayerJobs jobs(options.threads > 1 && options.vq_bits == 0);  // lossy layers are planned apart
+  const std::uint8_t base_coder = options.fast_decode ? 0 : 5;
   for (int k = 0; k < options.levels; ++k) {
     progress(k, 0);
     LevelPlan plan;
@@ -436,6 +483,10 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     current.clear();
     plan.report.lod = k;
     const bool more = k + 1 < options.levels && plan.points.size() > 4;
+    if (!more)  // the coarsest level: its points are the base layer's
+      jobs.start(plans.size(), [points = plan.points, q, base_coder] {
+        return RefinementLayer{0, encode_base(points, q, base_coder)};
+      });
     Tetrahedralization dt;
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
     if (rep.kind != Kind::points)
@@ -468,6 +519,10 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
       for (std::size_t i = 0; i < plan.points.size(); ++i)
         (dr.removed[i] ? plan.added : current).push_back(plan.points[i]);
       if (plan.added.empty()) current.clear();
+      if (!plan.added.empty() && !current.empty())
+        jobs.start(plans.size(), [coarse = current, added = plan.added, q, fast = options.fast_decode] {
+          return encode_refinement_layer(coarse, added, q, fast);
+        });
     }
     plan.report.simplices = rep.kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
     if (k == 0) plan.dt = std::move(dt);
@@ -498,8 +553,9 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     LevelReport& level = plan.report;
     const std::size_t before = w.size();
     ByteWriter layer;
+    std::optional<RefinementLayer> coded = jobs.take(i);
     if (i + 1 == plans.size()) {
-      layer.bytes(encode_base(plan.points, q, options.fast_decode ? 0 : 5));
+      layer.bytes(coded ? coded->bytes : encode_base(plan.points, q, base_coder));
       w.chunk(kBaseLayer, layer.data());
       level.new_points = plan.points.size();
     } else if (!lossy_payloads.empty()) {
@@ -507,7 +563,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
       level.new_points = plans[i].added.size();
     } else {
       const RefinementLayer refinement =
-          encode_refinement_layer(plans[i + 1].points, plans[i].added, q, options.fast_decode);
+          coded ? std::move(*coded) : encode_refinement_layer(plans[i + 1].points, plans[i].added, q, options.fast_decode);
       layer.u8(refinement.coder);
       layer.bytes(refinement.bytes);
       w.chunk(kRefinement, layer.data());

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
+#include <system_error>
 
 #include "entropy/rice.hpp"
 #include "reconstruct/distance.hpp"
@@ -368,21 +370,38 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   };
   using Entry = std::pair<std::uint64_t, double>;
   const auto by_key = [](const Entry& e, std::uint64_t key) { return e.first < key; };
-  for (const std::uint64_t k : order) {
-    const std::size_t t = reorder ? static_cast<std::size_t>(k & ((std::uint64_t{1} << kIndexBits) - 1)) : static_cast<std::size_t>(k);
-    if (use_cache && !cache->entries.empty()) {
-      const std::uint64_t key = key_of(t);
-      const auto it = std::lower_bound(cache->entries.begin(), cache->entries.end(), key, by_key);
-      if (it != cache->entries.end() && it->first == key) {
-        w[t] = it->second;
-        continue;
+  // Each value depends on its tetrahedron alone (and the cache, read only):
+  // with two threads, each takes one half of the order.
+  auto fill = [&](std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i < to; ++i) {
+      const std::uint64_t k = order[i];
+      const std::size_t t = reorder ? static_cast<std::size_t>(k & ((std::uint64_t{1} << kIndexBits) - 1)) : static_cast<std::size_t>(k);
+      if (use_cache && !cache->entries.empty()) {
+        const std::uint64_t key = key_of(t);
+        const auto it = std::lower_bound(cache->entries.begin(), cache->entries.end(), key, by_key);
+        if (it != cache->entries.end() && it->first == key) {
+          w[t] = it->second;
+          continue;
+        }
       }
+      Vec3 c{0, 0, 0};
+      for (auto v : dt.tets[t])
+        for (int a = 0; a < 3; ++a) c[a] += 0.25 * points[v][a];
+      w[t] = std::abs(wn(c));
     }
-    Vec3 c{0, 0, 0};
-    for (auto v : dt.tets[t])
-      for (int a = 0; a < 3; ++a) c[a] += 0.25 * points[v][a];
-    w[t] = std::abs(wn(c));
+  };
+  std::future<void> other;
+  std::size_t half = 0;
+  if (cache && cache->threads > 1 && nt >= 1024) {
+    half = nt / 2;
+    try {
+      other = std::async(std::launch::async, fill, half, nt);
+    } catch (const std::system_error&) {
+      half = 0;  // no thread to be had: all on this one
+    }
   }
+  fill(0, half ? half : nt);
+  if (half) other.get();
   if (cache) {
     std::vector<Entry>().swap(cache->entries);  // this level's replace the previous level's
     cache->field = field;

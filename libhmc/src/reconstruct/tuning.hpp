@@ -49,6 +49,9 @@ struct WindingCache {
   std::shared_ptr<const WindingNumber> tree;
   const std::vector<Vec3>* tree_points = nullptr;
   const std::vector<Triangle>* tree_surface = nullptr;
+  /// Threads for the winding numbers (EncodeOptions::threads): with 2 or
+  /// more, two halves of the tetrahedra at once; the values are the same.
+  unsigned threads = 1;
 };
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
