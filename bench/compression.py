@@ -165,7 +165,8 @@ def bench_model(a, tools, tmp, name, path, log):
     r = {"name": name, "path": path, "anchors": ANCHORS.get(name, (None, None, None, None))}
     h4, h1 = os.path.join(tmp, name + "-4.hmc"), os.path.join(tmp, name + "-1.hmc")
     log(f"  {name}: encode ({LEVELS} levels)")
-    enc4 = measure([tools["hmc"], "enc", path, "-o", h4, "--bits", str(Q), "--levels", str(LEVELS), "--json"],
+    enc4 = measure([tools["hmc"], "enc", path, "-o", h4, "--bits", str(Q), "--levels", str(LEVELS), "--json",
+                    "--threads", "1"],
                    a.repeat, a.budget)
     rep4 = json.loads(enc4["out"])
     log(f"  {name}: encode (1 level)")
@@ -259,7 +260,8 @@ def bench_big(a, tools, tmp, log):
     src = os.path.join(tmp, "ball.obj")  # OBJ: both coders read it
     run([tools["hmc"], "gen", "ball", "--vertices", str(a.big), "--seed", "1", "-o", src])
     h = os.path.join(tmp, "ball.hmc")
-    enc = measure([tools["hmc"], "enc", src, "-o", h, "--bits", str(Q), "--json"], a.repeat, a.budget)
+    enc = measure([tools["hmc"], "enc", src, "-o", h, "--bits", str(Q), "--json", "--threads", "1"], a.repeat,
+                  a.budget)
     rep = json.loads(enc["out"])
     drc = os.path.join(tmp, "ball.drc")
     denc = measure(["draco_encoder", "-point_cloud", "-i", src, "-o", drc, "-qp", str(Q), "-cl", "10"],
@@ -309,7 +311,8 @@ def bench_big_surface(a, tools, tmp, log):
     out = {"denc": denc}
     for key, flags in (("default", []), ("fast", ["--fast-decode"])):
         h = os.path.join(tmp, f"torus-{key}.hmc")
-        enc = measure([tools["hmc"], "enc", src, "-o", h, "--bits", str(Q), "--kind", "points", "--json"] + flags,
+        enc = measure([tools["hmc"], "enc", src, "-o", h, "--bits", str(Q), "--kind", "points", "--json",
+                       "--threads", "1"] + flags,
                       a.repeat, a.budget)
         rep = json.loads(enc["out"])
         dec_cmd = [tools["hmc"], "dec", h, "--points-only", "-o", os.path.join(tmp, f"torus-{key}.ply")]
@@ -478,8 +481,9 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         f"{loads[1]:.1f} at the end), so every time is the **median** of up to {a.repeat} runs "
         f"(fewer when the runs of one measurement exceeded {a.budget:g} s; counts in section 4). "
         "Times are CPU seconds (user + system, `wait4` rusage) of whole processes, which the other jobs "
-        "disturb far less than wall-clock time (shown beside); every program here runs on one thread, except "
-        "the one decode marked *two threads* (`hmc dec --threads 2`, the default on a machine with two). "
+        "disturb far less than wall-clock time (shown beside); every program here runs on one thread (`hmc "
+        "--threads 1`), except the one decode marked *two threads* (`hmc dec --threads 2`, the default on a "
+        "machine with two). "
         "Peak memory is the peak resident set of the process (`ru_maxrss` from `wait4` in `bench/peak_run`, "
         f"which launches every command; its floor, /bin/true's peak, is {tools['floor']:.1f} MiB).")
     say("")
