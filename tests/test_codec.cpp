@@ -467,6 +467,16 @@ TEST_CASE("limits: working memory, including a tetrahedralization quadratic in i
   REQUIRE(!r.ok());
   CHECK(r.error().status == Status::limit_exceeded);
   CHECK(r.error().message.find("delaunay") != std::string::npos);
+  // The same on two threads, every level rebuilt or the finest alone.
+  for (bool all : {true, false}) {
+    DecodeOptions two = small;
+    two.threads = 2;
+    two.rebuild_coarser_levels = all;
+    auto r2t = decode(b.data(), b.size(), two);
+    REQUIRE(!r2t.ok());
+    CHECK(r2t.error().status == Status::limit_exceeded);
+    CHECK(r2t.error().message == r.error().message);
+  }
   // Points only: no tetrahedralization, so 8 MiB is plenty.
   small.reconstruct = false;
   CHECK(decode_status(b, small) == Status::ok);

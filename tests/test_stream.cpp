@@ -385,10 +385,24 @@ TEST_CASE("decode() on two threads: the same levels, simplices and errors as on 
     REQUIRE(ref.status == Status::ok);
     check_same(whole(good.data(), good.size(), two), ref);
     for (const auto& l : ref.decoded.levels) rebuilt += l.rebuilt && (!l.triangles.empty() || !l.tetrahedra.empty());
-    // Cut at every chunk boundary: the levels complete by then.
+    // Cut at every chunk boundary: the levels complete by then. Also with
+    // only the finest decoded level rebuilt (its reconstruction still runs
+    // on the second thread), and with a coarser level requested.
     for (std::size_t n : chunk_boundaries(good)) {
       CAPTURE(n);
       check_same(whole(good.data(), n, two), whole(good.data(), n, one));
+      DecodeOptions one_finest = one, two_finest = two;
+      one_finest.rebuild_coarser_levels = two_finest.rebuild_coarser_levels = false;
+      const Outcome f = whole(good.data(), n, one_finest);
+      check_same(whole(good.data(), n, two_finest), f);
+      if (n == good.size()) {
+        REQUIRE(f.status == Status::ok);
+        REQUIRE_FALSE(f.decoded.levels.empty());
+        CHECK(f.decoded.levels.back().triangles == ref.decoded.levels.back().triangles);
+        CHECK(f.decoded.levels.back().tetrahedra == ref.decoded.levels.back().tetrahedra);
+        one_finest.finest_level = two_finest.finest_level = 1;
+        check_same(whole(good.data(), n, two_finest), whole(good.data(), n, one_finest));
+      }
     }
     std::vector<std::size_t> chunks;
     for (std::size_t c : chunk_boundaries(good))
