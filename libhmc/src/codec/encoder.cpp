@@ -4,7 +4,6 @@
 #include <future>
 #include <map>
 #include <string>
-#include <system_error>
 #include <unordered_map>
 
 #include "codec/format.hpp"
@@ -18,6 +17,7 @@
 #include "quant/scalar_quantizer.hpp"
 #include "util/bytes.hpp"
 #include "util/error.hpp"
+#include "util/helpers.hpp"
 #include "util/kdtree.hpp"
 
 namespace hmc {
@@ -177,7 +177,7 @@ struct LossyTarget {
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
                          Fidelity fidelity, const LevelPlan* finest, const LossyTarget* lossy = nullptr,
-                         WindingCache* winding = nullptr) {
+                         WindingCache* winding = nullptr, HelperBudget* helpers = nullptr) {
   const bool coarser = finest != nullptr;
   const auto idx = lossy ? lossy->index : index_in(fine_points, plan.points);
   const std::vector<Vec3>& surface_gp = lossy ? lossy->positions : fine_gp;
@@ -199,6 +199,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   }
   ti.surface_points = &surface_gp;
   ti.surface = &surface;
+  ti.helpers = helpers;
   // Coarser levels only approximate the input; exact fidelity still follows it.
   ti.approximate = coarser && fidelity != Fidelity::exact;
   const bool closed = kind == Kind::volume || fine.border.empty();
@@ -390,32 +391,26 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
   return vq_used ? vq : VectorQuantizer{};
 }
 
-// With EncodeOptions::threads > 1, the point layers are coded on a second
-// thread as soon as their two levels are known (a refinement layer once its
-// level is decimated, the base layer when the coarsest level's planning
-// starts), beside the planning of the coarser levels, which is most of the
-// work. At most one job runs at a time; each gives the bytes the same call
-// gives on the caller's thread, and an error it meets is rethrown by take().
+// With a helper thread free (EncodeOptions::threads > 1), each point layer
+// is coded there as soon as its two levels are known (a refinement layer
+// once its level is decimated, the base layer when the coarsest level's
+// planning starts), beside the planning of the coarser levels, which is most
+// of the work. A job gives the bytes the same call gives on the caller's
+// thread, and take() rethrows an error it meets; a layer whose job could not
+// start (no helper free) is coded by the caller when it is written.
 class LayerJobs {
  public:
-  explicit LayerJobs(bool on) : on_(on) {}
+  LayerJobs(bool on, HelperBudget& helpers) : on_(on), helpers_(helpers) {}
   LayerJobs(const LayerJobs&) = delete;
   LayerJobs& operator=(const LayerJobs&) = delete;
   ~LayerJobs() {
     for (auto& [index, job] : jobs_) job.wait();
   }
-  // Starts job `index` once the previous one has finished (without a thread
-  // to be had, take() finds nothing and the caller codes the layer itself).
   template <class Job>
   void start(std::size_t index, Job job) {
     if (!on_) return;
-    if (auto it = jobs_.find(last_); it != jobs_.end()) it->second.wait();
-    try {
-      jobs_[index] = std::async(std::launch::async, std::move(job));
-      last_ = index;
-    } catch (const std::system_error&) {
-      jobs_.erase(index);
-    }
+    auto f = helpers_.try_run(std::move(job));
+    if (f.valid()) jobs_[index] = std::move(f);
   }
   std::optional<RefinementLayer> take(std::size_t index) {
     auto it = jobs_.find(index);
@@ -427,7 +422,7 @@ class LayerJobs {
 
  private:
   bool on_;
-  std::size_t last_ = ~std::size_t{0};
+  HelperBudget& helpers_;
   std::map<std::size_t, std::future<RefinementLayer>> jobs_;
 };
 
@@ -472,9 +467,10 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   auto progress = [&](int level, double share) {
     if (options.progress) options.progress(level, std::min(1.0, (work_done + share) / work_total));
   };
+  HelperBudget helpers(options.threads);  // outlives every job below
   WindingCache winding;  // the input surface's winding numbers, from one level to the next
-  winding.threads = options.threads;
-  LayerJobs jobs(options.threads > 1 && options.vq_bits == 0);  // lossy layers are planned apart
+  winding.helpers = &helpers;
+  LayerJobs jobs(options.vq_bits == 0, helpers);  // lossy layers are planned apart
   const std::uint8_t base_coder = options.fast_decode ? 0 : 5;
   for (int k = 0; k < options.levels; ++k) {
     progress(k, 0);
@@ -491,7 +487,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
     if (rep.kind != Kind::points)
       plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity,
-                          k > 0 ? &plans.front() : nullptr, nullptr, &winding);
+                          k > 0 ? &plans.front() : nullptr, nullptr, &winding, &helpers);
     if (more) {
       LevelMesh mesh;
       mesh.points = &plan.points;

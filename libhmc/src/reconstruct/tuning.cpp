@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <future>
-#include <system_error>
 
 #include "entropy/rice.hpp"
 #include "reconstruct/distance.hpp"
@@ -391,17 +390,9 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
     }
   };
   std::future<void> other;
-  std::size_t half = 0;
-  if (cache && cache->threads > 1 && nt >= 1024) {
-    half = nt / 2;
-    try {
-      other = std::async(std::launch::async, fill, half, nt);
-    } catch (const std::system_error&) {
-      half = 0;  // no thread to be had: all on this one
-    }
-  }
-  fill(0, half ? half : nt);
-  if (half) other.get();
+  if (cache && cache->helpers && nt >= 1024) other = cache->helpers->try_run([&] { fill(nt / 2, nt); });
+  fill(0, other.valid() ? nt / 2 : nt);
+  if (other.valid()) other.get();
   if (cache) {
     std::vector<Entry>().swap(cache->entries);  // this level's replace the previous level's
     cache->field = field;
@@ -555,20 +546,51 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
         if (f) bits -= static_cast<double>(f) * std::log2(static_cast<double>(f) / static_cast<double>(n));
       return static_cast<std::uint64_t>(bits) + 8 * p.multipliers.size();
     };
-    auto consider = [&](const ReconParams& p, std::uint64_t class_bits) {
-      // No mismatch is the least a trial can reach: when even that does not
-      // beat the best, skip the work (the same choice, sooner; volumes'
-      // coarser levels often reach it with the first trial).
-      if (class_bits + list_bits(0, nt) >= best_bits) return false;
-      const auto [mism, correction_bits] = cost(p, scale, trial);
-      const std::uint64_t bits = class_bits + correction_bits;
-      if (bits >= best_bits) return false;
-      best_bits = bits;
-      best_mismatch = mism;
-      best_correction_bits = correction_bits;
-      best = p;
-      best_labels.swap(trial);
-      return true;
+    // Trials (parameters, their class bits), decided in order: each is kept
+    // when it costs fewer bits than the best so far. No mismatch is the
+    // least a trial can reach: when even that does not beat the best, it is
+    // not evaluated (the same choice, sooner; volumes' coarser levels often
+    // reach it with the first trial). The trials do not depend on each
+    // other, so with a helper thread free the second half is evaluated
+    // there first; the decisions are then made in order as before, on the
+    // same costs. Returns the index of the last trial kept, or -1.
+    struct Trial {
+      Trial(const ReconParams& params, std::uint64_t bits) : p(params), class_bits(bits) {}
+      ReconParams p;
+      std::uint64_t class_bits = 0;
+      bool evaluated = false;
+      std::uint64_t mismatches = 0, correction_bits = 0;
+      std::vector<std::uint8_t> labels;
+    };
+    auto consider = [&](std::vector<Trial>& trials) {
+      auto evaluate = [&](std::size_t from, std::size_t to) {
+        for (std::size_t i = from; i < to; ++i) {
+          Trial& t = trials[i];
+          // best_bits only falls: a trial that cannot win now cannot later.
+          if (t.class_bits + list_bits(0, nt) >= best_bits) continue;
+          std::tie(t.mismatches, t.correction_bits) = cost(t.p, scale, t.labels);
+          t.evaluated = true;
+        }
+      };
+      const std::size_t m = trials.size(), half = m / 2;
+      std::future<void> other;
+      if (in.helpers && m > 1) other = in.helpers->try_run([&] { evaluate(half, m); });
+      evaluate(0, other.valid() ? half : m);
+      if (other.valid()) other.get();
+      long kept = -1;
+      for (std::size_t i = 0; i < m; ++i) {
+        Trial& t = trials[i];
+        if (!t.evaluated || t.class_bits + list_bits(0, nt) >= best_bits) continue;
+        const std::uint64_t bits = t.class_bits + t.correction_bits;
+        if (bits >= best_bits) continue;
+        best_bits = bits;
+        best_mismatch = t.mismatches;
+        best_correction_bits = t.correction_bits;
+        best = t.p;
+        best_labels.swap(t.labels);
+        kept = static_cast<long>(i);
+      }
+      return kept;
     };
     // Equal shares first: 1, 2, 4, 8 or 16 classes.
     std::vector<std::size_t> best_splits;
@@ -583,11 +605,13 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       for (int c = 1; c < classes; ++c) splits.push_back(std::min(n - 1, (n * static_cast<std::size_t>(c)) / static_cast<std::size_t>(classes)));
       ReconParams p;
       const std::uint64_t class_bits = with_classes(splits, p);
+      std::vector<Trial> trials;
       for (bool peel : {false, true}) {
         p.peel = peel;
         p.repair = repairs;
-        if (consider(p, class_bits)) best_splits = splits;
+        trials.emplace_back(p, class_bits);
       }
+      if (consider(trials) >= 0) best_splits = splits;
     }
     // Then unequal shares: classes cost n·H(shares) bits, so a large class of
     // small limits and a few small classes of large ones is often cheaper at
@@ -611,16 +635,16 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
           s2.erase(s2.begin() + static_cast<std::ptrdiff_t>(i));
           moves.push_back(s2);
         }
-        bool improved = false;
-        std::vector<std::size_t> next;
+        std::vector<Trial> trials;
         for (const auto& s2 : moves) {
           ReconParams p;
           const std::uint64_t class_bits = with_classes(s2, p);
           p.peel = peel;
-          if (consider(p, class_bits)) improved = true, next = s2;
+          trials.emplace_back(p, class_bits);
         }
-        if (!improved) break;
-        best_splits = next;
+        const long kept = consider(trials);
+        if (kept < 0) break;
+        best_splits = moves[static_cast<std::size_t>(kept)];
       }
     }
     if (best.scale_rank == rank) best_scale = std::move(scale);

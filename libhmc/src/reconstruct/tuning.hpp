@@ -11,6 +11,7 @@
 #include "delaunay/delaunay.hpp"
 #include "hmc/codec.hpp"
 #include "reconstruct/reconstruct.hpp"
+#include "util/helpers.hpp"
 
 namespace hmc::detail {
 
@@ -49,9 +50,9 @@ struct WindingCache {
   std::shared_ptr<const WindingNumber> tree;
   const std::vector<Vec3>* tree_points = nullptr;
   const std::vector<Triangle>* tree_surface = nullptr;
-  /// Threads for the winding numbers (EncodeOptions::threads): with 2 or
-  /// more, two halves of the tetrahedra at once; the values are the same.
-  unsigned threads = 1;
+  /// Helper threads (EncodeOptions::threads): with one free, the winding
+  /// numbers are computed in two halves at once; the values are the same.
+  HelperBudget* helpers = nullptr;
 };
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
@@ -100,6 +101,10 @@ struct TuneInput {
   /// over to the decoded points, which can fold): after following it, mend
   /// its defects and steer towards the target topology before toggling.
   bool clean_target = false;
+  /// Helper threads (EncodeOptions::threads): with one free, trials that do
+  /// not depend on each other are evaluated two at a time (then decided in
+  /// order, so the choice is the same).
+  HelperBudget* helpers = nullptr;
 };
 
 /// Side information for `in.truth`: alpha classes, peeling, the border

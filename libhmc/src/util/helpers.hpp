@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// A budget of helper threads shared by the parts of one encode() call
+// (EncodeOptions::threads): a part that has work to spare asks for a helper
+// and, when none is free, does the work on its own thread. What is computed
+// never depends on where: the parts split work whose pieces are independent
+// and combine the results in a fixed order.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <future>
+#include <system_error>
+#include <utility>
+
+namespace hmc::detail {
+
+class HelperBudget {
+ public:
+  /// `threads` counts the caller's: threads - 1 helpers (none for 0 or 1).
+  explicit HelperBudget(unsigned threads) : free_(static_cast<int>(std::min(threads, 64u)) - 1) {}
+  HelperBudget(const HelperBudget&) = delete;
+  HelperBudget& operator=(const HelperBudget&) = delete;
+
+  /// Runs `job` on a new thread if a helper is free and returns the future
+  /// of its result (its exception, if it throws); otherwise returns an
+  /// invalid future and the caller does the work. The budget must outlive
+  /// the job: wait for every future it returned.
+  template <class Job>
+  auto try_run(Job job) -> std::future<decltype(job())> {
+    if (free_.fetch_sub(1) <= 0) {
+      free_.fetch_add(1);
+      return {};
+    }
+    try {
+      return std::async(std::launch::async, [this, job = std::move(job)]() mutable {
+        struct Release {
+          std::atomic<int>& count;
+          ~Release() { count.fetch_add(1); }
+        } release{free_};
+        return job();
+      });
+    } catch (const std::system_error&) {  // no thread to be had
+      free_.fetch_add(1);
+      return {};
+    }
+  }
+
+ private:
+  std::atomic<int> free_;
+};
+
+}  // namespace hmc::detail
