@@ -12,7 +12,7 @@
 // quantizer (origin = box minimum, step = largest extent / (2^q - 1),
 // rounding halves up); each input point lies within half a step of its
 // grid point; the stream and report are the same for a permutation of the
-// input; decode and inspect agree with the encoder's report, and the
+// input encoded on two threads; decode and inspect agree with the encoder's report, and the
 // decoder rebuilds the connectivity the encoder predicted (surface and
 // volume kinds, sets of at most 256 points).
 #include <algorithm>
@@ -199,7 +199,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (const auto& c : info.value().chunks) info_chunks += c.type == "info";
   FUZZ_CHECK(info_chunks == (opt.write_info ? 1u : 0u), "%zu info chunks", info_chunks);
 
-  // The stream codes the set: permuting the input changes nothing.
+  // The stream codes the set: permuting the input changes nothing, nor
+  // does encoding on two threads (done here with the permuted input).
   if (mesh.points.size() > 1) {
     hmc::Mesh shuffled = mesh;
     std::reverse(shuffled.points.begin(), shuffled.points.end());
@@ -207,9 +208,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       seed = seed * 1103515245u + 12345u;
       std::swap(shuffled.points[i], shuffled.points[(seed >> 8) % (i + 1)]);
     }
-    const auto again = hmc::encode(shuffled, opt);
+    hmc::EncodeOptions two = opt;
+    two.threads = 2;
+    const auto again = hmc::encode(shuffled, two);
     FUZZ_CHECK(again.ok(), "encoding the permuted input: %s", again.error().to_string().c_str());
-    FUZZ_CHECK(again.value().bytes == e.bytes, "the stream depends on the order of the input points");
+    FUZZ_CHECK(again.value().bytes == e.bytes, "the stream depends on the order of the input points or the threads");
     FUZZ_CHECK(again.value().points == e.points, "the encoder's points depend on the input order");
   }
   return 0;

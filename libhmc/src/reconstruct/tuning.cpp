@@ -370,7 +370,7 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   using Entry = std::pair<std::uint64_t, double>;
   const auto by_key = [](const Entry& e, std::uint64_t key) { return e.first < key; };
   // Each value depends on its tetrahedron alone (and the cache, read only):
-  // with two threads, each takes one half of the order.
+  // with a helper thread free, it takes the second half of the order.
   auto fill = [&](std::size_t from, std::size_t to) {
     for (std::size_t i = from; i < to; ++i) {
       const std::uint64_t k = order[i];
@@ -551,9 +551,11 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     // least a trial can reach: when even that does not beat the best, it is
     // not evaluated (the same choice, sooner; volumes' coarser levels often
     // reach it with the first trial). The trials do not depend on each
-    // other, so with a helper thread free the second half is evaluated
-    // there first; the decisions are then made in order as before, on the
-    // same costs. Returns the index of the last trial kept, or -1.
+    // other: with a helper thread free, it evaluates the second half (against
+    // the best at the start, which only falls) while this thread evaluates
+    // and decides the first; the second half is decided after it, in order,
+    // on the same costs, so the choice is the one-thread choice. Returns the
+    // index of the last trial kept, or -1.
     struct Trial {
       Trial(const ReconParams& params, std::uint64_t bits) : p(params), class_bits(bits) {}
       ReconParams p;
@@ -563,33 +565,37 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       std::vector<std::uint8_t> labels;
     };
     auto consider = [&](std::vector<Trial>& trials) {
-      auto evaluate = [&](std::size_t from, std::size_t to) {
-        for (std::size_t i = from; i < to; ++i) {
-          Trial& t = trials[i];
-          // best_bits only falls: a trial that cannot win now cannot later.
-          if (t.class_bits + list_bits(0, nt) >= best_bits) continue;
-          std::tie(t.mismatches, t.correction_bits) = cost(t.p, scale, t.labels);
-          t.evaluated = true;
-        }
+      auto evaluate = [&](Trial& t, std::uint64_t bound) {
+        if (t.class_bits + list_bits(0, nt) >= bound) return;
+        std::tie(t.mismatches, t.correction_bits) = cost(t.p, scale, t.labels);
+        t.evaluated = true;
       };
-      const std::size_t m = trials.size(), half = m / 2;
-      std::future<void> other;
-      if (in.helpers && m > 1) other = in.helpers->try_run([&] { evaluate(half, m); });
-      evaluate(0, other.valid() ? half : m);
-      if (other.valid()) other.get();
       long kept = -1;
-      for (std::size_t i = 0; i < m; ++i) {
+      auto decide = [&](std::size_t i) {
         Trial& t = trials[i];
-        if (!t.evaluated || t.class_bits + list_bits(0, nt) >= best_bits) continue;
+        if (!t.evaluated || t.class_bits + list_bits(0, nt) >= best_bits) return;
         const std::uint64_t bits = t.class_bits + t.correction_bits;
-        if (bits >= best_bits) continue;
+        if (bits >= best_bits) return;
         best_bits = bits;
         best_mismatch = t.mismatches;
         best_correction_bits = t.correction_bits;
         best = t.p;
         best_labels.swap(t.labels);
         kept = static_cast<long>(i);
+      };
+      const std::size_t m = trials.size(), half = m / 2;
+      std::future<void> other;
+      if (in.helpers && m > 1)
+        other = in.helpers->try_run([&trials, &evaluate, half, m, start = best_bits] {
+          for (std::size_t i = half; i < m; ++i) evaluate(trials[i], start);
+        });
+      const std::size_t mine = other.valid() ? half : m;
+      for (std::size_t i = 0; i < mine; ++i) {
+        evaluate(trials[i], best_bits);
+        decide(i);
       }
+      if (other.valid()) other.get();
+      for (std::size_t i = mine; i < m; ++i) decide(i);
       return kept;
     };
     // Equal shares first: 1, 2, 4, 8 or 16 classes.
