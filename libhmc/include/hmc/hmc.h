@@ -47,7 +47,10 @@
  * hmc_decoder_set_error_order() with ::HMC_ERRORS_AS_WHOLE makes it report
  * exactly what hmc_decoder_decode() reports, at hmc_decoder_finish().
  *
- * **Threads.** A handle must not be used by two threads at once.
+ * **Threads.** A handle must not be used by two threads at once. The C API
+ * starts no thread of its own: encoding and decoding run on the caller's
+ * (the C++ options `EncodeOptions::threads` and `DecodeOptions::threads`
+ * are the way to a second thread).
  *
  * Example (whole buffer):
  * @code
