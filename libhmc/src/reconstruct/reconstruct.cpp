@@ -6,7 +6,6 @@
 #include <string>
 
 #include "util/error.hpp"
-#include "util/radix_sort.hpp"
 #include "util/u256.hpp"
 
 namespace hmc::detail {
@@ -622,43 +621,35 @@ int defects_of_faces(bool wanted, DefectScratch& work, bool* on) {
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        std::uint32_t rank) {
   const std::size_t n = points.size();
-  // Edge (a, b), a < b < n, as the key a·2^w + b with w the bits of n - 1:
-  // the radix sort then makes as few passes as the indices need.
-  int w = 1;
-  while (w < 32 && ((n - 1) >> w) != 0) ++w;
-  const std::uint64_t low = (std::uint64_t{1} << w) - 1;
-  std::vector<std::uint64_t> keys;
-  keys.reserve(dt.tets.size() * 6);
-  for (const auto& t : dt.tets)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) {
-        const std::uint64_t a = std::min(t[i], t[j]), b = std::max(t[i], t[j]);
-        keys.push_back((a << w) | b);
-      }
-  radix_sort(keys, 2 * w);
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  // The tetrahedra around each vertex (a counting sort of their corners);
+  // then each vertex's distinct Delaunay neighbours, found through them with
+  // a stamp per vertex (no global sort of the edges), and the k-th smallest
+  // of their squared distances. Every edge is measured from both ends.
   std::vector<std::uint32_t> start(n + 1, 0);
-  for (std::uint64_t k : keys) ++start[k >> w], ++start[k & low];
-  for (std::size_t v = 0, sum = 0; v <= n; ++v) {
-    const std::size_t c = v < n ? start[v] : 0;
-    start[v] = static_cast<std::uint32_t>(sum);
-    sum += c;
+  for (const auto& t : dt.tets)
+    for (auto v : t) ++start[v + 1];
+  for (std::size_t v = 0; v < n; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> incident(start[n]);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t t = 0; t < dt.tets.size(); ++t)
+      for (auto v : dt.tets[t]) incident[fill[v]++] = t;
   }
-  std::vector<std::uint64_t> len(keys.size() * 2);
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (std::uint64_t k : keys) {
-    const auto a = static_cast<std::uint32_t>(k >> w), b = static_cast<std::uint32_t>(k & low);
-    const std::uint64_t d = dist2(points[a], points[b]);
-    len[fill[a]++] = d;
-    len[fill[b]++] = d;
-  }
+  std::vector<std::uint32_t> stamp(n, ~0u);
+  std::vector<std::uint64_t> len;
   std::vector<std::uint64_t> scale(n, 0);
-  for (std::size_t v = 0; v < n; ++v) {
-    auto b = len.begin() + start[v], e = len.begin() + start[v + 1];
-    if (b == e) continue;
-    const auto k = std::min<std::size_t>(rank, static_cast<std::size_t>(e - b)) - 1;
-    std::nth_element(b, b + static_cast<long>(k), e);
-    scale[v] = *(b + static_cast<long>(k));
+  for (std::uint32_t v = 0; v < n; ++v) {
+    len.clear();
+    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
+      for (auto w : dt.tets[incident[i]])
+        if (w != v && stamp[w] != v) {
+          stamp[w] = v;
+          len.push_back(dist2(points[v], points[w]));
+        }
+    if (len.empty()) continue;
+    const auto k = std::min<std::size_t>(rank, len.size()) - 1;
+    std::nth_element(len.begin(), len.begin() + static_cast<long>(k), len.end());
+    scale[v] = len[k];
   }
   return scale;
 }
