@@ -296,13 +296,9 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
 // interface's Euler characteristic (no handles or components appear).
 void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, const std::vector<std::uint8_t>& want) {
   const std::size_t n = want.size(), nt = dt.tets.size();
-  std::vector<std::uint32_t> start(n + 1, 0), incident(nt * 4);
-  for (const auto& t : dt.tets)
-    for (auto v : t) ++start[v + 1];
-  for (std::size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-  for (std::uint32_t t = 0; t < nt; ++t)
-    for (auto v : dt.tets[t]) incident[fill[v]++] = t;
+  const VertexTets by_vertex = vertex_tets(dt, n);
+  const std::vector<std::uint32_t>& start = by_vertex.start;
+  const std::vector<std::uint32_t>& incident = by_vertex.incident;
   DefectScratch scratch;
   // face[t]: bit k set when face k of t is on the interface, bit 4 when t
   // is inside, kept up to date by flip(); back[t], bits 2k and 2k + 1: the
@@ -552,6 +548,19 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
 
 }  // namespace
 
+VertexTets vertex_tets(const Tetrahedralization& dt, std::size_t n) {
+  VertexTets out;
+  out.start.assign(n + 1, 0);
+  for (const auto& t : dt.tets)
+    for (auto v : t) ++out.start[v + 1];
+  for (std::size_t v = 0; v < n; ++v) out.start[v + 1] += out.start[v];
+  out.incident.resize(out.start[n]);
+  std::vector<std::uint32_t> fill(out.start.begin(), out.start.end() - 1);
+  for (std::uint32_t t = 0; t < dt.tets.size(); ++t)
+    for (auto v : dt.tets[t]) out.incident[fill[v]++] = t;
+  return out;
+}
+
 int local_defects(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                   const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                   const std::vector<std::uint8_t>& want, std::uint32_t v, DefectScratch& work, bool* on) {
@@ -621,20 +630,13 @@ int defects_of_faces(bool wanted, DefectScratch& work, bool* on) {
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        std::uint32_t rank) {
   const std::size_t n = points.size();
-  // The tetrahedra around each vertex (a counting sort of their corners);
-  // then each vertex's distinct Delaunay neighbours, found through them with
-  // a stamp per vertex (no global sort of the edges), and the k-th smallest
-  // of their squared distances. Every edge is measured from both ends.
-  std::vector<std::uint32_t> start(n + 1, 0);
-  for (const auto& t : dt.tets)
-    for (auto v : t) ++start[v + 1];
-  for (std::size_t v = 0; v < n; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> incident(start[n]);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::uint32_t t = 0; t < dt.tets.size(); ++t)
-      for (auto v : dt.tets[t]) incident[fill[v]++] = t;
-  }
+  // Each vertex's distinct Delaunay neighbours, found through its
+  // tetrahedra with a stamp per vertex (no global sort of the edges), and
+  // the k-th smallest of their squared distances. Every edge is measured
+  // from both ends.
+  const VertexTets by_vertex = vertex_tets(dt, n);
+  const std::vector<std::uint32_t>& start = by_vertex.start;
+  const std::vector<std::uint32_t>& incident = by_vertex.incident;
   std::vector<std::uint32_t> stamp(n, ~0u);
   std::vector<std::uint64_t> len;
   std::vector<std::uint64_t> scale(n, 0);

@@ -107,6 +107,13 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
 /// surface's local Euler characteristic.
 void repair_labels(const Tetrahedralization& dt, Kind kind, std::vector<std::uint8_t>& inside);
 
+/// The tetrahedra around each vertex of `dt` (n vertices): those of v are
+/// incident[start[v] .. start[v + 1]), in ascending index.
+struct VertexTets {
+  std::vector<std::uint32_t> start, incident;
+};
+VertexTets vertex_tets(const Tetrahedralization& dt, std::size_t n);
+
 /// Work buffers of local_defects(), reused from call to call.
 struct DefectScratch {
   std::vector<std::uint32_t> ends, parent;

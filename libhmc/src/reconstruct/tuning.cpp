@@ -190,13 +190,10 @@ class TargetCleaner {
   // `flippable`: the tetrahedra the search may flip (empty: all).
   TargetCleaner(const Tetrahedralization& dt, const std::vector<std::uint8_t>& want,
                 const std::vector<std::uint8_t>& flippable = {})
-      : dt_(dt), want_(want), flippable_(flippable), start_(want.size() + 1, 0), incident_(dt.tets.size() * 4) {
-    for (const auto& t : dt.tets)
-      for (auto v : t) ++start_[v + 1];
-    for (std::size_t v = 0; v < want.size(); ++v) start_[v + 1] += start_[v];
-    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-    for (std::uint32_t t = 0; t < dt.tets.size(); ++t)
-      for (auto v : dt.tets[t]) incident_[fill[v]++] = t;
+      : dt_(dt), want_(want), flippable_(flippable) {
+    auto around = vertex_tets(dt, want.size());
+    start_ = std::move(around.start);
+    incident_ = std::move(around.incident);
   }
 
   std::size_t run(std::vector<std::uint8_t>& inside, int rounds) {
