@@ -5,7 +5,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <system_error>
 
 #include "codec/format.hpp"
 #include "codec/stream_decoder.hpp"
@@ -15,6 +14,7 @@
 #include "pointset/anchored_vq.hpp"
 #include "pointset/refine.hpp"
 #include "util/error.hpp"
+#include "util/helpers.hpp"
 
 namespace hmc {
 
@@ -141,7 +141,7 @@ std::string truncation_warning(const ContainerView& view, const ChunkWalker& wal
 // The per-chunk decoding state, shared with the streaming decoder
 // (codec/stream_decoder.hpp).
 struct ChunkDecoder::State {
-  explicit State(const DecodeOptions& o) : options(o), walk(options.limits) {}
+  explicit State(const DecodeOptions& o) : options(o), walk(options.limits), helpers(o.threads > 1 ? 2 : 1) {}
   DecodeOptions options;
   ChunkWalker walk;
   Decoded out;
@@ -178,6 +178,7 @@ struct ChunkDecoder::State {
   // information) and its result is stored by join(), on this thread, so the
   // output is the one of a sequential decode.
   bool overlap = false;
+  HelperBudget helpers;  // one helper at most (the one in flight); outlives it
   struct InFlight {
     std::size_t index;    // in out.levels
     std::future<Reconstruction> result;
@@ -266,13 +267,9 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
     // The points are copied: the level moves into out.levels meanwhile.
     auto points = std::make_shared<const std::vector<GridPoint>>(level.points);
     std::shared_ptr<const Tetrahedralization> tets = shared;
-    try {
-      in_flight = InFlight{index, std::async(std::launch::async, [points, tets, kind, params] {
-                                    return reconstruct(*points, *tets, kind, params);
-                                  })};
-    } catch (const std::system_error&) {
-      // No thread to be had: reconstruct here, as with one thread.
-    }
+    // Without a thread to be had it is reconstructed here, as with one thread.
+    auto f = helpers.try_run([points, tets, kind, params] { return reconstruct(*points, *tets, kind, params); });
+    if (f.valid()) in_flight = InFlight{index, std::move(f)};
   }
   if (!in_flight) store(level, reconstruct(level.points, *shared, kind, params));
   if (level.lod > std::max(options.finest_level, 0) && memory <= max && keep <= max - memory) {

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-// A budget of helper threads shared by the parts of one encode() call
-// (EncodeOptions::threads): a part that has work to spare asks for a helper
-// and, when none is free, does the work on its own thread. What is computed
-// never depends on where: the parts split work whose pieces are independent
-// and combine the results in a fixed order.
+// A budget of helper threads shared by the parts of one encode() or
+// decode() call (EncodeOptions::threads, DecodeOptions::threads): a part
+// that has work to spare asks for a helper and, when none is free, does the
+// work on its own thread. What is computed never depends on where: the
+// parts split work whose pieces are independent and combine the results in
+// a fixed order.
 #pragma once
 
 #include <algorithm>
