@@ -165,14 +165,27 @@ void check_stream_equivalence(const Bytes& b, const DecodeOptions& o = {}) {
   }
 }
 
+// The payload length of the chunk whose type field is at `at`.
+std::uint32_t chunk_length(const Bytes& b, std::size_t at) {
+  return std::uint32_t{b[at + 4]} | std::uint32_t{b[at + 5]} << 8 | std::uint32_t{b[at + 6]} << 16 |
+         std::uint32_t{b[at + 7]} << 24;
+}
+
+// Rewrites the CRC of the chunk at `at` to match its type and payload.
+void fix_crc(Bytes& b, std::size_t at) {
+  const std::uint32_t len = chunk_length(b, at);
+  const detail::ChunkType type{static_cast<char>(b[at]), static_cast<char>(b[at + 1]), static_cast<char>(b[at + 2]),
+                               static_cast<char>(b[at + 3])};
+  const std::uint32_t crc = detail::chunk_crc(type, b.data() + at + 8, len);
+  for (int k = 0; k < 4; ++k) b[at + 8 + len + k] = static_cast<std::uint8_t>(crc >> (8 * k));
+}
+
 std::vector<std::size_t> chunk_boundaries(const Bytes& b) {
   std::vector<std::size_t> v;
   std::size_t pos = 10;
   while (pos + 8 <= b.size()) {
     v.push_back(pos);
-    const std::uint32_t len = std::uint32_t{b[pos + 4]} | std::uint32_t{b[pos + 5]} << 8 |
-                              std::uint32_t{b[pos + 6]} << 16 | std::uint32_t{b[pos + 7]} << 24;
-    pos += 12 + std::size_t{len};
+    pos += 12 + std::size_t{chunk_length(b, pos)};
   }
   v.push_back(b.size());
   return v;
@@ -322,10 +335,8 @@ TEST_CASE("several defects: at once in stream order, or exactly what decode() re
   REQUIRE(last > base);
   Bytes b = good;
   b[base + 8] = 9;  // coder 9
-  const std::uint32_t len = std::uint32_t{b[base + 4]} | std::uint32_t{b[base + 5]} << 8 |
-                            std::uint32_t{b[base + 6]} << 16 | std::uint32_t{b[base + 7]} << 24;
-  const std::uint32_t crc = detail::chunk_crc(detail::chunk_type("BASE"), b.data() + base + 8, len);
-  for (int k = 0; k < 4; ++k) b[base + 8 + len + k] = static_cast<std::uint8_t>(crc >> (8 * k));
+  fix_crc(b, base);
+  const std::uint32_t len = chunk_length(b, base);
   Bytes only_content = b;
   b[last - 1] = static_cast<std::uint8_t>(b[last - 1] ^ 0x5a);  // the CRC of the chunk before the last
   REQUIRE(whole(only_content.data(), only_content.size()).status == Status::bad_layer);
@@ -363,14 +374,6 @@ TEST_CASE("decode() on two threads: the same levels, simplices and errors as on 
   // with one in a later chunk, so that a reconstruction running on the
   // second thread and the main thread's next chunk can both fail; the error
   // reported must be the one the single-threaded decoder meets first.
-  auto fix_crc = [](Bytes& b, std::size_t at) {
-    const std::uint32_t len = std::uint32_t{b[at + 4]} | std::uint32_t{b[at + 5]} << 8 |
-                              std::uint32_t{b[at + 6]} << 16 | std::uint32_t{b[at + 7]} << 24;
-    const detail::ChunkType type{static_cast<char>(b[at]), static_cast<char>(b[at + 1]), static_cast<char>(b[at + 2]),
-                                 static_cast<char>(b[at + 3])};
-    const std::uint32_t crc = detail::chunk_crc(type, b.data() + at + 8, len);
-    for (int k = 0; k < 4; ++k) b[at + 8 + len + k] = static_cast<std::uint8_t>(crc >> (8 * k));
-  };
   auto is_level_chunk = [](const Bytes& b, std::size_t at) {
     const std::string type(reinterpret_cast<const char*>(b.data() + at), 4);
     return type == "BASE" || type == "REFN" || type == "RCON";
@@ -412,8 +415,7 @@ TEST_CASE("decode() on two threads: the same levels, simplices and errors as on 
       for (int trial = 0; trial < 6; ++trial) {
         Bytes b = good;
         auto damage = [&](std::size_t at) {
-          const std::uint32_t len = std::uint32_t{b[at + 4]} | std::uint32_t{b[at + 5]} << 8 |
-                                    std::uint32_t{b[at + 6]} << 16 | std::uint32_t{b[at + 7]} << 24;
+          const std::uint32_t len = chunk_length(b, at);
           if (len == 0) return;
           const std::size_t pos = at + 8 + std::uniform_int_distribution<std::size_t>(0, len - 1)(rng);
           b[pos] = static_cast<std::uint8_t>(b[pos] ^ (1u << std::uniform_int_distribution<int>(0, 7)(rng)));
@@ -450,8 +452,7 @@ TEST_CASE("decode() on two threads: the same levels, simplices and errors as on 
   REQUIRE(rcon.size() == 4);
   REQUIRE(refn.size() == 3);
   const std::size_t r = rcon[0];
-  const std::uint32_t len = std::uint32_t{good[r + 4]} | std::uint32_t{good[r + 5]} << 8 |
-                            std::uint32_t{good[r + 6]} << 16 | std::uint32_t{good[r + 7]} << 24;
+  const std::uint32_t len = chunk_length(good, r);
   detail::ChunkView view{detail::chunk_type("RCON"), r, len, good.data() + r + 8};
   detail::ReconParams p = detail::read_recon(view, ref.decoded.levels[0].points.size());
   p.compact = false;
