@@ -524,11 +524,48 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
           try_failed_at[t] = clock;
           continue;
         }
-        for (auto w : tv) cache[w] = -1;
-        // Defects are never negative: stop adding once the sum reaches the
-        // old one (the try has failed).
+        // The states of t's vertices after the flip. Most follow from their
+        // states before it without a count: the faces of F(w) are the edges
+        // of w's *link* (face (w, x, y) joins x and y), so w has no defect
+        // exactly when its link is one cycle, and inverting t toggles the
+        // triangle xyz that t's three faces through w make in it. So a
+        // vertex off the interface gets the triangle, one cycle: no defect.
+        // A vertex without defects, its link a cycle C, with c of t's faces
+        // through it on the interface (edges of C) before the flip:
+        // c = 3: C was the triangle and the link empties; c = 2: C shortcuts
+        // its path x-y-z to the edge xz, still a cycle; c = 1 (xy in C):
+        // C detours x-z-y, a cycle unless z was on C (degree 4: one defect;
+        // is some face around the edge (w, z), t's own two aside, on?);
+        // c = 0: the triangle joins C at some corners (each then of degree 4,
+        // a defect) or at none (a second fan), so at least one defect,
+        // counted in full only where one would not settle the try. So do
+        // the vertices with defects before.
+        std::array<int, 4> now{-1, -1, -1, -1};  // state after, -1 while unknown
         int after = 0;
-        for (int k = 0; k < 4 && after < before; ++k) after += defects(tv[k]);
+        for (int k = 0; k < 4; ++k) {
+          if (!(was[k] & 1)) {
+            now[k] = 1;
+          } else if (was[k] >> 1 == 0) {
+            int c = 0, on_face = 0;
+            for (int j = 0; j < 4; ++j)
+              if (j != k && face_on(t, j, from)) ++c, on_face = j;
+            if (c == 3) now[k] = want[tv[k]] ? 2 : 0;
+            else if (c == 2) now[k] = 1;
+            else if (c == 1) now[k] = ring_on(t, k, on_face) ? 3 : 1;
+            else after += 1;  // c = 0: at least one defect; counted below if needed
+          }
+          if (now[k] >= 0) after += now[k] >> 1;
+        }
+        // Defects are never negative: stop counting once the sum reaches the
+        // old one (the try has failed).
+        for (int k = 0; k < 4 && after < before; ++k) {
+          if (now[k] >= 0) continue;
+          if (was[k] == 1) after -= 1;  // c = 0: its one defect counted above, now counted in full
+          cache[tv[k]] = -1;
+          after += defects(tv[k]);
+          now[k] = cache[tv[k]];
+        }
+        for (int k = 0; k < 4; ++k) cache[tv[k]] = now[k];
         if (after >= before) {
           flip(t);
           restore(was);
@@ -815,6 +852,11 @@ void remove_bubbles(const Tetrahedralization& dt, std::vector<std::uint8_t>& ins
     if (small && (label || !on_hull)) flips.insert(flips.end(), members.begin(), members.end());
   }
   for (auto t : flips) inside[t] ^= 1;
+}
+
+void repair_search(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside,
+                   const std::vector<std::uint8_t>& want) {
+  repair(dt, inside, want);
 }
 
 void repair_labels(const Tetrahedralization& dt, Kind kind, std::vector<std::uint8_t>& inside) {

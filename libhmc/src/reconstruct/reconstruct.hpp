@@ -107,6 +107,13 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
 /// surface's local Euler characteristic.
 void repair_labels(const Tetrahedralization& dt, Kind kind, std::vector<std::uint8_t>& inside);
 
+/// The greedy search of the repair step alone (spec 11.4a, after the
+/// bubbles), with want[v] = 1 for the points that must be on the interface
+/// (the spec's W): what repair_labels() runs after remove_bubbles(). Tests
+/// hold it to the spec's pseudo-code.
+void repair_search(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside,
+                   const std::vector<std::uint8_t>& want);
+
 /// The tetrahedra around each vertex of `dt` (n vertices): those of v are
 /// incident[start[v] .. start[v + 1]), in ascending index.
 struct VertexTets {
