@@ -496,34 +496,15 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         const bool from = inside[t] != 0;
         int on_before = 0;
         for (int k = 0; k < 4; ++k) on_before += was[k] & 1;
-        // The Euler test first: it needs only whether t's vertices stay on
-        // the interface, not their defects, and it settles most tries (on
-        // the Stanford bunny's coarsest level 68% fail it; of the rest, 87%
-        // then fail the defect test). A try is kept when both pass, so the
-        // order does not change the result. Until the defects are
-        // recomputed, the cached states of t's vertices describe the labels
-        // before the flip, and they are right again once it is undone.
+        // Three tests, the cheapest first: a bound on the defects after the
+        // flip from the states before it (below), the Euler test, which
+        // needs only whether t's vertices stay on the interface, and the
+        // defects of the vertices the bound could not settle. A try is kept
+        // when all pass, so the order does not change the result. Until the
+        // defects are recomputed, the cached states of t's vertices describe
+        // the labels before the flip, and they are right again once it is
+        // undone.
         flip(t);
-        int on_after = 0;
-        unsigned both = 0;
-        // w stays on the interface when one of t's faces through it is an
-        // interface face after the flip; only when none is (all three were
-        // before) must its other faces be looked at.
-        for (int k = 0; k < 4; ++k) {
-          bool on = false;
-          for (int j = 0; j < 4 && !on; ++j)
-            if (j != k) on = face_on(t, j, !from);
-          const int now = on ? 1 : on_interface(tv[k]);
-          on_after += now;
-          both |= static_cast<unsigned>(now & was[k] & 1) << k;
-        }
-        // Labels are flipped here: euler_kept reads t's label from `from`
-        // only, its neighbours' from `inside`.
-        if (!euler_kept(t, from, on_before, on_after, both)) {
-          flip(t);
-          try_failed_at[t] = clock;
-          continue;
-        }
         // The states of t's vertices after the flip. Most follow from their
         // states before it without a count: the faces of F(w) are the edges
         // of w's *link* (face (w, x, y) joins x and y), so w has no defect
@@ -555,6 +536,35 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
             else after += 1;  // c = 0: at least one defect; counted below if needed
           }
           if (now[k] >= 0) after += now[k] >> 1;
+        }
+        if (after >= before) {
+          flip(t);
+          try_failed_at[t] = clock;
+          continue;
+        }
+        int on_after = 0;
+        unsigned both = 0;
+        // Whether w is on the interface after the flip: bit 0 of its new
+        // state where the bound found it; else w is on when one of t's faces
+        // through it is an interface face after the flip; only when none is
+        // (all three were before) must its other faces be looked at.
+        for (int k = 0; k < 4; ++k) {
+          int is_on = now[k] & 1;
+          if (now[k] < 0) {
+            bool on = false;
+            for (int j = 0; j < 4 && !on; ++j)
+              if (j != k) on = face_on(t, j, !from);
+            is_on = on ? 1 : on_interface(tv[k]);
+          }
+          on_after += is_on;
+          both |= static_cast<unsigned>(is_on & was[k] & 1) << k;
+        }
+        // Labels are flipped here: euler_kept reads t's label from `from`
+        // only, its neighbours' from `inside`.
+        if (!euler_kept(t, from, on_before, on_after, both)) {
+          flip(t);
+          try_failed_at[t] = clock;
+          continue;
         }
         // Defects are never negative: stop counting once the sum reaches the
         // old one (the try has failed).
