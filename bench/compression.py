@@ -682,8 +682,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         f"{gm('r_dec1'):.2f} Delaunays (its points alone {gp1:.2f}; then one Delaunay, the reconstruction rule, "
         f"toggles and output), rebuilding the finest level of the {LEVELS}-level stream alone {gm('r_decf'):.2f}, "
         f"rebuilding every level {gm('r_dec'):.2f}. So the 1.5 bar would need the points and one level's "
-        "reconstruction well under half a Delaunay and the coarser levels' reconstructions nearly free; those run "
-        "the repair of spec 11.4a, a local search that takes most of their time.")
+        "reconstruction well under half a Delaunay and the coarser levels nearly free, though each needs its own "
+        "Delaunay refinement, the rule and the repair of spec 11.4a.")
     say("")
 
     # 4. Raw times.
