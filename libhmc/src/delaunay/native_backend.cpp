@@ -48,6 +48,7 @@ class Builder {
       : p_(pts), inf_(static_cast<std::uint32_t>(pts.size())), max_cells_(max_cells) {}
 
   void run(std::vector<std::array<std::uint32_t, 4>>& tets, std::vector<std::array<std::uint32_t, 4>>& nb) {
+    reserve(0, p_.size());
     std::vector<std::uint32_t> all(p_.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i);
     auto order = insertion_order(std::move(all));
@@ -64,6 +65,7 @@ class Builder {
   void refine(const std::vector<std::uint32_t>& index, std::vector<std::array<std::uint32_t, 4>>& sub_tets,
               std::vector<std::array<std::uint32_t, 4>>& sub_nb, std::vector<std::array<std::uint32_t, 4>>& tets,
               std::vector<std::array<std::uint32_t, 4>>& nb) {
+    reserve(sub_tets.size(), p_.size() - std::min(p_.size(), index.size()));
     seed(index, sub_tets, sub_nb);
     std::vector<std::array<std::uint32_t, 4>>().swap(sub_tets);
     std::vector<std::array<std::uint32_t, 4>>().swap(sub_nb);
@@ -109,6 +111,16 @@ class Builder {
   std::uint32_t pair_stamp_ = 0;
 
   bool is_hull(std::uint32_t c) const { return cells_[c].v[3] == inf_; }
+
+  // Room for the cells of `cells` tetrahedra and `points` more points
+  // (about 6.5 tetrahedra per point, plus hull cells), within the limit: the
+  // cell lists then grow without being copied, and pages they never use
+  // are never touched.
+  void reserve(std::size_t cells, std::size_t points) {
+    const std::uint64_t want = std::min<std::uint64_t>(max_cells_, cells + cells / 8 + 8 * std::uint64_t{points} + 64);
+    cells_.reserve(static_cast<std::size_t>(want));
+    mark_.reserve(static_cast<std::size_t>(want));
+  }
 
   // BRIO order: a fixed-seed shuffle, then rounds of geometrically growing
   // size, each sorted along a Morton curve.

@@ -497,14 +497,13 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
         int on_before = 0;
         for (int k = 0; k < 4; ++k) on_before += was[k] & 1;
         // Three tests, the cheapest first: a bound on the defects after the
-        // flip from the states before it (below), the Euler test, which
-        // needs only whether t's vertices stay on the interface, and the
-        // defects of the vertices the bound could not settle. A try is kept
-        // when all pass, so the order does not change the result. Until the
-        // defects are recomputed, the cached states of t's vertices describe
-        // the labels before the flip, and they are right again once it is
-        // undone.
-        flip(t);
+        // flip from the states before it (below; it reads only labels before
+        // the flip, so t is flipped after it), the Euler test, which needs
+        // only whether t's vertices stay on the interface, and the defects of
+        // the vertices the bound could not settle. A try is kept when all
+        // pass, so the order does not change the result. Until the defects
+        // are recomputed, the cached states of t's vertices describe the
+        // labels before the flip, and they are right again once it is undone.
         // The states of t's vertices after the flip. Most follow from their
         // states before it without a count: the faces of F(w) are the edges
         // of w's *link* (face (w, x, y) joins x and y), so w has no defect
@@ -538,10 +537,10 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
           if (now[k] >= 0) after += now[k] >> 1;
         }
         if (after >= before) {
-          flip(t);
           try_failed_at[t] = clock;
           continue;
         }
+        flip(t);
         int on_after = 0;
         unsigned both = 0;
         // Whether w is on the interface after the flip: bit 0 of its new
