@@ -958,19 +958,25 @@ std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetra
                                                                      const std::vector<std::uint32_t>& toggled,
                                                                      const std::vector<std::uint8_t>* cand,
                                                                      bool vertices) {
-  return toggle_ranks(toggle_contexts(dt, inside, cand, vertices), toggled, kToggleContexts);
+  return std::move(toggle_ranks(toggle_contexts(dt, inside, cand, vertices), toggled)[2]);
 }
 
-std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const std::vector<std::uint8_t>& ctx,
-                                                                     const std::vector<std::uint32_t>& toggled,
-                                                                     int contexts) {
-  std::array<std::vector<std::uint32_t>, kToggleContexts> ranks;
+std::array<ToggleRanks, 3> toggle_ranks(const std::vector<std::uint8_t>& ctx, const std::vector<std::uint32_t>& toggled) {
+  // A toggled tetrahedron's rank among the contexts c mod m is the sum of
+  // the counts so far of the (kToggleContexts) contexts congruent to c.
+  static constexpr int kCounts[3] = {kLabelContexts, kCandidateContexts, kToggleContexts};
+  std::array<ToggleRanks, 3> ranks;
   std::array<std::uint32_t, kToggleContexts> seen{};
   std::size_t next = 0;
   for (std::size_t t = 0; t < ctx.size(); ++t) {
-    const int c = ctx[t] % contexts;
+    const int c = ctx[t];
     if (next < toggled.size() && toggled[next] == t) {
-      ranks[static_cast<std::size_t>(c)].push_back(seen[static_cast<std::size_t>(c)]);
+      for (std::size_t i = 0; i < 3; ++i) {
+        std::uint32_t rank = 0;
+        for (int same = c % kCounts[i]; same < kToggleContexts; same += kCounts[i])
+          rank += seen[static_cast<std::size_t>(same)];
+        ranks[i][static_cast<std::size_t>(c % kCounts[i])].push_back(rank);
+      }
       ++next;
     }
     ++seen[static_cast<std::size_t>(c)];

@@ -165,12 +165,11 @@ std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetra
                                                                      const std::vector<std::uint8_t>* cand = nullptr,
                                                                      bool vertices = false);
 
-/// The same from contexts already computed (toggle_contexts()), taken
-/// modulo `contexts`: the 80 contexts give the 40 (modulo 40) and the 8
-/// (modulo 8), so one pass serves the three sets.
-std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const std::vector<std::uint8_t>& ctx,
-                                                                     const std::vector<std::uint32_t>& toggled,
-                                                                     int contexts);
+/// The same from contexts already computed (toggle_contexts()), for the
+/// three context sets at once: [0] the 8 label contexts (modulo 8), [1] the
+/// 40 with candidates (modulo 40), [2] all 80, in one pass.
+using ToggleRanks = std::array<std::vector<std::uint32_t>, kToggleContexts>;
+std::array<ToggleRanks, 3> toggle_ranks(const std::vector<std::uint8_t>& ctx, const std::vector<std::uint32_t>& toggled);
 
 /// Number of toggles `p` carries, in either form.
 std::size_t toggle_count(const ReconParams& p);

@@ -53,27 +53,7 @@ ToggleCoding code_toggles(const Tetrahedralization& dt, const std::vector<std::u
     out.bits = bits(out.ranks, kLabelContexts);
     return out;
   }
-  // toggle_ranks() for the three context counts in one pass: a toggled
-  // tetrahedron's rank among the contexts c mod m is the sum of the counts
-  // so far of the (kToggleContexts) contexts congruent to c.
-  const auto ctx = toggle_contexts(dt, inside, &cand, true);
-  static constexpr int kCounts[3] = {kLabelContexts, kCandidateContexts, kToggleContexts};
-  std::array<std::array<std::vector<std::uint32_t>, kToggleContexts>, 3> ranks;
-  std::array<std::uint32_t, kToggleContexts> seen{};
-  std::size_t next = 0;
-  for (std::size_t t = 0; t < ctx.size(); ++t) {
-    const int c = ctx[t];
-    if (next < toggled.size() && toggled[next] == t) {
-      for (std::size_t i = 0; i < 3; ++i) {
-        std::uint32_t rank = 0;
-        for (int same = c % kCounts[i]; same < kToggleContexts; same += kCounts[i])
-          rank += seen[static_cast<std::size_t>(same)];
-        ranks[i][static_cast<std::size_t>(c % kCounts[i])].push_back(rank);
-      }
-      ++next;
-    }
-    ++seen[static_cast<std::size_t>(c)];
-  }
+  auto ranks = toggle_ranks(toggle_contexts(dt, inside, &cand, true), toggled);
   out.ranks = std::move(ranks[0]);
   out.bits = bits(out.ranks, kLabelContexts);
   const std::uint64_t b = bits(ranks[1], kCandidateContexts);
