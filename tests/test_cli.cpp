@@ -107,6 +107,14 @@ TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each,
   REQUIRE(r.code == 0);
   CHECK(count(r.out, "\"rebuilt\": true") == 3);
   CHECK(slurp(dir + "/three.ply") == slurp(dir + "/one.ply"));
+  // A level beyond the stream's coarsest decodes the coarsest, and says so.
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --level 7 -o " + q(dir + "/far.ply"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(r.err.find("levels 0 to 2; decoded its coarsest, level 2") != std::string::npos);
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --level 2 -o " + q(dir + "/coarsest.ply"));
+  REQUIRE(r.code == 0);
+  CHECK(r.err.find("warning") == std::string::npos);
+  CHECK(slurp(dir + "/far.ply") == slurp(dir + "/coarsest.ply"));
   r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --rebuild some");
   CHECK(r.code == 1);
   CHECK(r.err.find("--rebuild") != std::string::npos);

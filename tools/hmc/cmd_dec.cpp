@@ -95,7 +95,11 @@ int cmd_dec(int argc, char** argv) {
   const auto t1 = std::chrono::steady_clock::now();
   const Decoded& d = dec.value();
   if (!d.warning.empty()) std::fprintf(stderr, "hmc: warning: %s: %s\n", in.c_str(), d.warning.c_str());
-  if (opt.finest_level > 0 && d.finest().lod > opt.finest_level)
+  const auto declared = static_cast<int>(d.declared_points.size());
+  if (opt.finest_level > 0 && opt.finest_level >= declared)
+    std::fprintf(stderr, "hmc: warning: %s: --level %d: the stream has levels 0 to %d; decoded its coarsest, level %d\n",
+                 in.c_str(), opt.finest_level, declared - 1, declared - 1);
+  else if (opt.finest_level > 0 && d.finest().lod > opt.finest_level)
     std::fprintf(stderr, "hmc: warning: %s: level %d is not in the stream; the finest decoded level is %d\n", in.c_str(),
                  opt.finest_level, d.finest().lod);
 
