@@ -239,8 +239,17 @@ class DepthNodes {
   /// The points that rank node i's children (spec 8.2; 8.4 with `causal`)
   /// into `nb`; returns their number.
   int points(std::size_t i, int neighbours, const std::uint8_t* causal, std::array<Doubled, kCausalPoints>& nb) const {
+    Near near;
+    const int found = nearest(i, neighbours, near);
+    return expand(i, near, found, causal, nb);
+  }
+
+  /// The min(neighbours, number of nodes) node centres nearest to node i's
+  /// (its own first), by (distance, index): indices into `near`; returns
+  /// their number. The first k of them are the k nearest for any smaller k.
+  using Near = std::array<std::uint32_t, kMaxNeighbours>;
+  int nearest(std::size_t i, int neighbours, Near& near) const {
     const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
-    std::array<std::uint32_t, kMaxNeighbours> near{};
     int found = lattice_ ? lattice_->nearest(i, k, near.data()) : -1;
     if (found < 0) {
       if (!tree_) tree_.emplace(centres_);
@@ -248,6 +257,12 @@ class DepthNodes {
       found = tree_->nearest(centres_[i], k, hits.data());
       for (int j = 0; j < found; ++j) near[static_cast<std::size_t>(j)] = hits[static_cast<std::size_t>(j)].index;
     }
+    return found;
+  }
+
+  /// points() from the first `found` of node i's nearest nodes.
+  int expand(std::size_t i, const Near& near, int found, const std::uint8_t* causal,
+             std::array<Doubled, kCausalPoints>& nb) const {
     int count = 0;
     const std::int64_t h = std::int64_t{1} << (q_ - d_);
     for (int j = 0; j < found && count < kCausalPoints; ++j) {
@@ -284,9 +299,17 @@ class DepthNodes {
   std::array<std::uint8_t, 2 * kGapChoices.size()> symbols(std::uint64_t node, std::size_t i, unsigned occupancy,
                                                            int neighbours, const std::uint8_t* causal,
                                                            int& context) const {
+    Near near;
+    const int found = nearest(i, neighbours, near);
+    return symbols(node, i, occupancy, near, found, causal, context);
+  }
+  /// The same from the first `found` of node i's nearest nodes (nearest()).
+  std::array<std::uint8_t, 2 * kGapChoices.size()> symbols(std::uint64_t node, std::size_t i, unsigned occupancy,
+                                                           const Near& near, int found, const std::uint8_t* causal,
+                                                           int& context) const {
     std::array<std::uint8_t, 2 * kGapChoices.size()> out{};
     std::array<Doubled, kCausalPoints> nb{};
-    const int count = points(i, neighbours, causal, nb);
+    const int count = expand(i, near, found, causal, nb);
     for (const bool quadric : {false, true}) {
       if (quadric && !causal) break;
       const ChildKeys k = keys_of(node, nb, count, true, quadric, context);
@@ -496,30 +519,39 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
   // depth takes it (else empty).
   std::vector<RankedDepths> by_count(counts, RankedDepths(sq));
   std::vector<std::optional<RankedDepths>> with_far(counts);
-  std::vector<std::uint8_t> all;
+  std::vector<std::vector<std::uint8_t>> all(counts);  // per count: node i's symbols for every choice, ctx below
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     const auto nodes = nodes_at(keys, d, q);
     const auto& occ = levels[sd].occupancy;
     if (!ranking_may_pay(nodes, levels[sd], d, q, coder)) continue;
     const DepthNodes depth(nodes, d, q);
-    all.resize(occ.size() * kChoices);
+    // Each node's nearest nodes are searched once, for the largest count:
+    // the smaller counts take their first ones.
+    for (std::size_t n = 0; n < counts; ++n) {
+      all[n].resize(occ.size() * kChoices);
+      by_count[n].context[sd].resize(occ.size());
+    }
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      DepthNodes::Near near{};
+      const int found = depth.nearest(i, kBaseNeighbours[counts - 1], near);
+      for (std::size_t n = 0; n < counts; ++n) {
+        int c = 0;
+        const int k = std::min(found, kBaseNeighbours[n]);
+        const auto s = depth.symbols(nodes[i], i, occ[i], near, k, causal ? occ.data() : nullptr, c);
+        by_count[n].context[sd][i] = static_cast<std::uint8_t>(c);
+        std::copy(s.begin(), s.end(), all[n].begin() + static_cast<std::ptrdiff_t>(i * kChoices));
+      }
+    }
     for (std::size_t n = 0; n < counts; ++n) {
       RankedDepths& r = by_count[n];
-      auto& ctx = r.context[sd];
-      ctx.resize(occ.size());
-      for (std::size_t i = 0; i < nodes.size(); ++i) {
-        int c = 0;
-        const auto s = depth.symbols(nodes[i], i, occ[i], kBaseNeighbours[n], causal ? occ.data() : nullptr, c);
-        ctx[i] = static_cast<std::uint8_t>(c);
-        std::copy(s.begin(), s.end(), all.begin() + static_cast<std::ptrdiff_t>(i * kChoices));
-      }
-      const auto [chosen, near] = cheapest_choice(all, ctx, coder);
+      const auto& ctx = r.context[sd];
+      const auto [chosen, near] = cheapest_choice(all[n], ctx, coder);
       auto take = [&](RankedDepths& into, std::size_t choice) {
         into.gaps[sd] = kGapChoices[choice % kGapChoices.size()];
         into.quadric[sd] = choice >= kGapChoices.size();
         into.symbols[sd].resize(occ.size());
-        for (std::size_t i = 0; i < nodes.size(); ++i) into.symbols[sd][i] = all[i * kChoices + choice];
+        for (std::size_t i = 0; i < nodes.size(); ++i) into.symbols[sd][i] = all[n][i * kChoices + choice];
       };
       if (far && chosen != near && !with_far[n]) with_far[n] = r;  // the depths before, as without it
       take(r, near);
