@@ -137,8 +137,8 @@ struct EncodeOptions {
   /// planning of the coarser levels; half of the winding numbers that tell
   /// which tetrahedra lie inside the input; half of each batch of
   /// reconstruction trials that do not depend on each other. The stream is
-  /// the same, byte for byte. On the shared models with two threads: 10-35 %
-  /// less wall-clock time at four levels, 30-45 % at one.
+  /// the same, byte for byte. On five of the shared models with two
+  /// threads: 22-28 % less wall-clock time at four levels, 30-39 % at one.
   unsigned threads = 1;
 };
 
@@ -272,9 +272,10 @@ struct DecodeOptions {
   /// are not used), each level's reconstruction (spec section 11, after its
   /// tetrahedralization) runs on a second thread while the next level's
   /// points and tetrahedralization are decoded: on the four-level streams
-  /// of the Stanford bunny and the horse, 28 % less wall-clock time for
-  /// about the same CPU time (volumes, whose reconstruction is cheaper, 9 to
-  /// 16 %), and up to one more level's working memory at once. The
+  /// of the Stanford bunny and the horse, 20 to 22 % less wall-clock time
+  /// for about the same CPU time (volumes, whose reconstruction is cheaper,
+  /// 7 to 12 %), and up to one more level's working memory at once (a
+  /// fifth to a third more peak memory there). The
   /// output, errors included, is the same. StreamDecoder, which hands out
   /// each level as it completes, uses one thread whatever this says.
   unsigned threads = 1;
