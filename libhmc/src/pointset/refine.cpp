@@ -300,7 +300,8 @@ std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 // The symbols of the coarse level's ranking. With `gaps`, it also counts,
 // per gap weight gaps[j], the symbols that ranking would give:
 // counts[j][((d * 9 + w) * 2 + x) * kAlphabet + s], as encode_impl's freq
-// (the coarse level must have been set to rank for other weights).
+// (the coarse level must have been set to rank for other weights), and
+// keeps them: other[i * gaps.size() + j] for the i-th symbol.
 class Traversal {
  public:
   Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q, const std::vector<int>& gaps = {})
@@ -310,6 +311,28 @@ class Traversal {
   }
   std::vector<Symbol> symbols;
   std::vector<std::vector<std::uint64_t>> counts;
+  std::vector<std::uint8_t> other;
+
+  /// The symbols a traversal ranked with weight chosen[d] at depth d would
+  /// give, where each chosen[d] is the weight this one ranked depth d with
+  /// (`ranked`) or one of `gaps`: the same nodes in the same order, each
+  /// node's symbol the one its keys give for that weight. False (and
+  /// `out` untouched) when some weight is neither.
+  bool symbols_for(const std::vector<int>& ranked, const std::vector<int>& chosen, std::vector<Symbol>& out) const {
+    std::vector<int> column(chosen.size(), -1);  // per depth: -1 the ranked symbol, else the index in gaps_
+    for (std::size_t d = 0; d < chosen.size(); ++d) {
+      if (chosen[d] == ranked[d]) continue;
+      const auto at = std::find(gaps_.begin(), gaps_.end(), chosen[d]);
+      if (at == gaps_.end()) return false;
+      column[d] = static_cast<int>(at - gaps_.begin());
+    }
+    out = symbols;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const int j = column[out[i].depth];
+      if (j >= 0) out[i].index = other[i * gaps_.size() + static_cast<std::size_t>(j)];
+    }
+    return true;
+  }
 
  private:
   void visit(int d, std::uint64_t key, std::uint32_t c0, std::uint32_t c1, std::uint32_t a0, std::uint32_t a1,
@@ -336,7 +359,9 @@ class Traversal {
     symbols.push_back(symbol);
     const std::size_t row = (static_cast<std::size_t>(d) * 9 + symbol.weight) * 2 + symbol.plane;
     for (std::size_t j = 0; j < gaps_.size(); ++j) {
-      ++counts[j][row * kAlphabet + coarse_.last_keys().symbol(mask, gaps_[j], occ)];
+      const std::uint8_t s = coarse_.last_keys().symbol(mask, gaps_[j], occ);
+      ++counts[j][row * kAlphabet + s];
+      other.push_back(s);
     }
     if (d + 1 == q_) return;
     for (std::size_t c = 0; c < 8; ++c)
@@ -651,7 +676,9 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
       }
     }
     if (!best || bytes_of(plan) < bytes_of(best->plan)) {
-      if (better) {
+      // The symbols of the weights chosen: kept by the traversal (the
+      // same as ranking again with them).
+      if (better && !traversal.symbols_for(gaps, plan.gaps, traversal.symbols)) {
         level.set_gaps(plan.gaps);
         traversal.symbols = Traversal(level, added, q).symbols;
       }
