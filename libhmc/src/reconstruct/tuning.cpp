@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <future>
+#include <set>
 
 #include "entropy/rice.hpp"
 #include "reconstruct/distance.hpp"
@@ -504,6 +505,9 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   const std::vector<std::uint32_t> ranks = kind == Kind::surface ? std::vector<std::uint32_t>{6}
                                                                   : std::vector<std::uint32_t>{6, 10};
   std::vector<std::uint64_t> best_scale;  // local_scale() at best.scale_rank
+  // The parameters of every trial so far (scale rank, peel, repair, class
+  // limits: all a trial's cost depends on besides the level itself).
+  std::set<std::vector<std::uint32_t>> tried;
   for (std::uint32_t rank : ranks) {
     auto scale = local_scale(points, dt, rank);
     // Multiplier each vertex needs, in 1/256 units, capped to the table range.
@@ -555,13 +559,23 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       Trial(const ReconParams& params, std::uint64_t bits) : p(params), class_bits(bits) {}
       ReconParams p;
       std::uint64_t class_bits = 0;
+      bool repeated = false;  // the parameters of an earlier trial
       bool evaluated = false;
       std::uint64_t mismatches = 0, correction_bits = 0;
       std::vector<std::uint8_t> labels;
     };
     auto consider = [&](std::vector<Trial>& trials) {
+      // A trial with the parameters of an earlier one (moves that undo the
+      // last step, class limits that merge) costs what that one cost, which
+      // did not beat the best then, or became it and has been beaten since:
+      // it cannot be kept, and is not evaluated again.
+      for (Trial& t : trials) {
+        std::vector<std::uint32_t> key{rank, t.p.peel ? 1u : 0u, t.p.repair ? 1u : 0u};
+        key.insert(key.end(), t.p.multipliers.begin(), t.p.multipliers.end());
+        t.repeated = !tried.insert(std::move(key)).second;
+      }
       auto evaluate = [&](Trial& t, std::uint64_t bound) {
-        if (t.class_bits + list_bits(0, nt) >= bound) return;
+        if (t.repeated || t.class_bits + list_bits(0, nt) >= bound) return;
         std::tie(t.mismatches, t.correction_bits) = cost(t.p, scale, t.labels);
         t.evaluated = true;
       };
