@@ -921,34 +921,42 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
 std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                                           const std::vector<std::uint8_t>* cand, bool vertices) {
   const std::size_t nt = dt.tets.size();
-  // Is face k of t on the interface (shared with a tetrahedron of the other
-  // label, or a hull face of an inside one)?
-  auto on_interface = [&](std::size_t t, int k) {
-    const std::uint32_t u = dt.neighbors[t][k];
-    return u == kNoTet ? inside[t] != 0 : inside[u] != inside[t];
-  };
+  // Bit k of faces[t]: face k of t is on the interface (shared with a
+  // tetrahedron of the other label, or a hull face of an inside one);
+  // looked up once, for both uses below.
+  std::vector<std::uint8_t> faces(nt);
+  std::uint32_t top = 0;  // the number of points the tetrahedra use
+  for (std::size_t t = 0; t < nt; ++t) {
+    unsigned m = 0;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u == kNoTet ? inside[t] != 0 : inside[u] != inside[t]) m |= 1u << k;
+    }
+    faces[t] = static_cast<std::uint8_t>(m);
+    if (vertices)
+      for (auto v : dt.tets[t]) top = std::max(top, v + 1);
+  }
   // Points on the interface (spec 11.4a), when the contexts need them.
   std::vector<std::uint8_t> on;
   if (vertices) {
-    std::uint32_t top = 0;
-    for (const auto& tet : dt.tets)
-      for (auto v : tet) top = std::max(top, v + 1);
     on.assign(top, 0);
     for (std::size_t t = 0; t < nt; ++t)
-      for (int k = 0; k < 4; ++k)
-        if (on_interface(t, k))
-          for (int j = 0; j < 3; ++j) on[dt.tets[t][kFaceVertices[k][j]]] = 1;
+      for (unsigned m = faces[t]; m != 0; m &= m - 1) {
+        const int k = __builtin_ctz(m);
+        for (int j = 0; j < 3; ++j) on[dt.tets[t][kFaceVertices[k][j]]] = 1;
+      }
   }
   std::vector<std::uint8_t> ctx(nt);
   for (std::size_t t = 0; t < nt; ++t) {
-    int faces = 0, candidates = 0, points_on = 0;
+    int candidates = 0, points_on = 0;
     for (int k = 0; k < 4; ++k) {
-      faces += on_interface(t, k);
       if (cand) candidates += (*cand)[4 * t + static_cast<std::size_t>(k)];
       if (vertices) points_on += on[dt.tets[t][k]];
     }
+    static constexpr int kCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};  // set bits of 0-15
+    const int on_faces = kCount[faces[t]];
     ctx[t] = static_cast<std::uint8_t>((points_on == 4 ? kCandidateContexts : 0) + kLabelContexts * candidates +
-                                       4 * inside[t] + std::min(faces, 3));
+                                       4 * inside[t] + std::min(on_faces, 3));
   }
   return ctx;
 }
