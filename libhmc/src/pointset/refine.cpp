@@ -313,12 +313,12 @@ class Traversal {
   std::vector<std::vector<std::uint64_t>> counts;
   std::vector<std::uint8_t> other;
 
-  /// The symbols a traversal ranked with weight chosen[d] at depth d would
-  /// give, where each chosen[d] is the weight this one ranked depth d with
-  /// (`ranked`) or one of `gaps`: the same nodes in the same order, each
-  /// node's symbol the one its keys give for that weight. False (and
-  /// `out` untouched) when some weight is neither.
-  bool symbols_for(const std::vector<int>& ranked, const std::vector<int>& chosen, std::vector<Symbol>& out) const {
+  /// Turns `symbols` into those a traversal ranked with weight chosen[d] at
+  /// depth d would give, where each chosen[d] is the weight this one ranked
+  /// depth d with (`ranked`) or one of `gaps`: the same nodes in the same
+  /// order, each node's symbol the one its keys give for that weight. False
+  /// (and `symbols` untouched) when some weight is neither.
+  bool rank_with(const std::vector<int>& ranked, const std::vector<int>& chosen) {
     std::vector<int> column(chosen.size(), -1);  // per depth: -1 the ranked symbol, else the index in gaps_
     for (std::size_t d = 0; d < chosen.size(); ++d) {
       if (chosen[d] == ranked[d]) continue;
@@ -326,10 +326,9 @@ class Traversal {
       if (at == gaps_.end()) return false;
       column[d] = static_cast<int>(at - gaps_.begin());
     }
-    out = symbols;
-    for (std::size_t i = 0; i < out.size(); ++i) {
-      const int j = column[out[i].depth];
-      if (j >= 0) out[i].index = other[i * gaps_.size() + static_cast<std::size_t>(j)];
+    for (std::size_t i = 0; i < symbols.size(); ++i) {
+      const int j = column[symbols[i].depth];
+      if (j >= 0) symbols[i].index = other[i * gaps_.size() + static_cast<std::size_t>(j)];
     }
     return true;
   }
@@ -678,7 +677,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     if (!best || bytes_of(plan) < bytes_of(best->plan)) {
       // The symbols of the weights chosen: kept by the traversal (the
       // same as ranking again with them).
-      if (better && !traversal.symbols_for(gaps, plan.gaps, traversal.symbols)) {
+      if (better && !traversal.rank_with(gaps, plan.gaps)) {
         level.set_gaps(plan.gaps);
         traversal.symbols = Traversal(level, added, q).symbols;
       }
