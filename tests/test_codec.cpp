@@ -497,6 +497,51 @@ TEST_CASE("limits: working memory, including a tetrahedralization quadratic in i
   CHECK(r3.error().message.find("level 0 (600 points)") != std::string::npos);
 }
 
+TEST_CASE("limits: finest level alone on two threads, coarser levels tetrahedralized ahead") {
+  // With rebuild_coarser_levels off and two threads, a helper tetrahedralizes
+  // the coarser levels while the finer levels' points decode, and the finest
+  // level's tetrahedralization is refined from that. It is speculative: at
+  // every memory limit the outcome must be that of one thread. The limits
+  // tried are those around the smallest that one thread decodes with.
+  EncodeOptions eo;
+  eo.levels = 4;
+  const auto e = encode(samples::torus(48, 20), eo);
+  REQUIRE(e.ok());
+  const auto& b = e.value().bytes;
+  auto run = [&](std::uint64_t max_memory, unsigned threads) {
+    DecodeOptions o;
+    o.limits.max_memory = max_memory;
+    o.rebuild_coarser_levels = false;
+    o.threads = threads;
+    return decode(b.data(), b.size(), o);
+  };
+  std::uint64_t lo = 1, hi = 64u << 20;  // fails at lo, decodes at hi
+  REQUIRE(!run(lo, 1).ok());
+  REQUIRE(run(hi, 1).ok());
+  while (hi - lo > 1) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    (run(mid, 1).ok() ? hi : lo) = mid;
+  }
+  const auto ref = run(hi, 1).value();
+  REQUIRE(ref.levels.size() == 4);
+  REQUIRE_FALSE(ref.finest().triangles.empty());
+  std::size_t failed = 0;
+  for (std::uint64_t m : {lo - 1000, lo, hi, hi + 1000, hi + 10000, hi + 100000, std::uint64_t{64} << 20}) {
+    CAPTURE(m);
+    const auto a = run(m, 1);
+    const auto t = run(m, 2);
+    REQUIRE(a.ok() == t.ok());
+    if (!a.ok()) {
+      ++failed;
+      CHECK(t.error().message == a.error().message);
+      continue;
+    }
+    CHECK(t.value().finest().triangles == ref.finest().triangles);
+    CHECK(t.value().levels.size() == 4);
+  }
+  CHECK(failed == 2);
+}
+
 TEST_CASE("inspect lists chunks and levels without decoding layers") {
   auto e = encode(samples::torus(30, 12)).value();
   auto i = inspect(e.bytes.data(), e.bytes.size());

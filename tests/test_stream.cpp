@@ -389,8 +389,10 @@ TEST_CASE("decode() on two threads: the same levels, simplices and errors as on 
     check_same(whole(good.data(), good.size(), two), ref);
     for (const auto& l : ref.decoded.levels) rebuilt += l.rebuilt && (!l.triangles.empty() || !l.tetrahedra.empty());
     // Cut at every chunk boundary: the levels complete by then. Also with
-    // only the finest decoded level rebuilt (its reconstruction still runs
-    // on the second thread), and with a coarser level requested.
+    // only the finest decoded level rebuilt (the second thread builds the
+    // coarser levels' tetrahedralizations ahead, the finest one's is refined
+    // from them, and its reconstruction runs on the second thread), and with
+    // a coarser level requested.
     for (std::size_t n : chunk_boundaries(good)) {
       CAPTURE(n);
       check_same(whole(good.data(), n, two), whole(good.data(), n, one));
@@ -428,6 +430,11 @@ TEST_CASE("decode() on two threads: the same levels, simplices and errors as on 
         const Outcome a = whole(b.data(), b.size(), one);
         errors += a.status != Status::ok;
         check_same(whole(b.data(), b.size(), two), a);
+        // Only the finest level rebuilt: the second thread tetrahedralizes
+        // the coarser levels ahead, speculatively.
+        DecodeOptions one_finest = one, two_finest = two;
+        one_finest.rebuild_coarser_levels = two_finest.rebuild_coarser_levels = false;
+        check_same(whole(b.data(), b.size(), two_finest), whole(b.data(), b.size(), one_finest));
       }
     }
   }

@@ -50,7 +50,8 @@ int cmd_dec(int argc, char** argv) {
                               "--max-memory", static_cast<long long>(opt.limits.max_memory >> 20), 1, 1ll << 30))
                           << 20;
   opt.reconstruct = !a.flag("--points-only");
-  // Each level's reconstruction overlaps the next level's decoding.
+  // A second thread reconstructs a level, or tetrahedralizes the coarser
+  // levels ahead, while the next level decodes.
   opt.threads = threads_option(a);
   // Rebuild what is written or shown: one output file needs one level's
   // connectivity, so the coarser levels' reconstructions (more than half

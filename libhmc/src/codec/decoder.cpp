@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
+#include <array>
+#include <chrono>
 #include <exception>
 #include <future>
 #include <memory>
@@ -208,15 +210,52 @@ struct ChunkDecoder::State {
     }
     std::rethrow_exception(error);
   }
+  // DecodeOptions::threads > 1 without rebuild_coarser_levels: the levels
+  // before the rebuilt one get no tetrahedralization of their own, but a
+  // helper builds one for the last of them it can, each from the previous
+  // one it finished (delaunay_refine), while this thread decodes the finer
+  // levels' points; the rebuilt level's is then built from it, inserting
+  // only the points added since. The work is speculative: a failure there
+  // (a limit, memory) is dropped and the level is tetrahedralized from
+  // scratch, as with one thread, so the output and the errors are those of
+  // a sequential decode. At most one in flight, its bytes counted in
+  // `memory` (an estimate until joined).
+  struct Ahead {
+    int lod;  // the level whose points it tetrahedralizes
+    std::shared_ptr<const std::vector<GridPoint>> points;
+    std::future<std::optional<Tetrahedralization>> dt;  // empty when it failed
+    std::uint64_t bytes;
+  };
+  std::optional<Ahead> ahead;
+  void speculate(const DecodedLevel& level);
+  struct Early {
+    int lod;
+    std::shared_ptr<const std::vector<GridPoint>> points;
+    Tetrahedralization dt;
+  };
+  // Waits for the speculative tetrahedralization and takes it out of the
+  // accounting; nullopt when there was none or it failed.
+  std::optional<Early> take_ahead() {
+    if (!ahead) return std::nullopt;
+    Ahead a = std::move(*ahead);
+    ahead.reset();
+    memory -= a.bytes;
+    std::optional<Tetrahedralization> dt = a.dt.get();  // the job throws nothing
+    if (!dt) return std::nullopt;
+    return Early{a.lod, std::move(a.points), std::move(*dt)};
+  }
+
   ~State() {
     if (in_flight) in_flight->result.wait();
+    if (ahead) ahead->dt.wait();
   }
 
   // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
-  // The kept tetrahedralization only saves time: it goes first, so that no
-  // stream fails that would decode without it.
+  // The kept and the speculative tetrahedralizations only save time: they
+  // go first, so that no stream fails that would decode without them.
   void reserve(std::uint64_t bytes, const std::string& what) {
     const std::uint64_t max = options.limits.max_memory;
+    if (ahead && (bytes > max || memory > max - bytes)) take_ahead();
     if (previous_dt && (bytes > max || memory > max - bytes)) {
       previous_dt.reset();
       memory -= previous_dt_bytes;
@@ -243,11 +282,29 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
   previous_dt_bytes = 0;
   if (in_flight && in_flight->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) join();
   if (!in_flight) memory -= coarse_bytes;
+  // A speculative tetrahedralization leaves the accounting first, so that
+  // the room is the one a sequential decode has.
+  std::optional<Early> early = take_ahead();
   reserve(n * kPointBytes, what);
   const std::uint64_t room = options.limits.max_memory - memory - n * kPointBytes;
-  // The previous level is the coarser one, and its points a subset.
+  // The previous level is the coarser one, and its points a subset; so are
+  // those of a speculative tetrahedralization of a coarser level.
   Tetrahedralization dt;
-  if (coarse && coarser && coarser->lod == level.lod + 1) {
+  if (early) {
+    coarse.reset();
+    // Insertions into it may fail where building from scratch does not
+    // (the limit bounds the cells alive at any moment, and the two ways
+    // pass through different ones): any failure falls back to that, whose
+    // outcome is the sequential one.
+    try {
+      if (early->lod == level.lod) dt = std::move(early->dt);
+      else dt = delaunay_refine(level.points, *early->points, std::move(early->dt), room / kTetBytes);
+    } catch (...) {
+      early.reset();
+      dt = delaunay(level.points, room / kTetBytes);
+    }
+    early.reset();
+  } else if (coarse && coarser && coarser->lod == level.lod + 1) {
     // Handed over, or copied while the reconstruction in flight reads it.
     Tetrahedralization sub = in_flight ? *coarse : std::move(*coarse);
     coarse.reset();
@@ -277,6 +334,35 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
     previous_dt_bytes = keep;
     memory += keep;
   }
+}
+
+void ChunkDecoder::State::speculate(const DecodedLevel& level) {
+  if (!overlap) return;
+  std::optional<Early> from;  // the last level the helper finished, if any
+  if (ahead) {
+    // Still busy: a later level refines from what it is building.
+    if (ahead->dt.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    from = take_ahead();
+  }
+  // Its estimate: about 6.5 tetrahedra per point, each with its neighbours.
+  const std::uint64_t n = level.points.size();
+  const std::uint64_t bytes = n * 7 * 2 * sizeof(std::array<std::uint32_t, 4>);
+  const std::uint64_t max = options.limits.max_memory;
+  if (memory > max || bytes > max - memory) return;
+  const std::uint64_t max_tets = (max - memory - bytes) / kTetBytes;
+  auto points = std::make_shared<const std::vector<GridPoint>>(level.points);
+  auto job = [points, from = std::move(from), max_tets]() mutable -> std::optional<Tetrahedralization> {
+    try {
+      if (from) return delaunay_refine(*points, *from->points, std::move(from->dt), max_tets);
+      return delaunay(*points, max_tets);
+    } catch (...) {
+      return std::nullopt;  // the rebuilt level is tetrahedralized from scratch
+    }
+  };
+  auto f = helpers.try_run(std::move(job));
+  if (!f.valid()) return;
+  memory += bytes;
+  ahead = Ahead{level.lod, std::move(points), std::move(f), bytes};
 }
 
 ChunkDecoder::ChunkDecoder(const DecodeOptions& options) : s_(std::make_unique<State>(options)) {}
@@ -362,10 +448,12 @@ bool ChunkDecoder::chunk_impl(const ChunkView& c) {
                                          : std::vector<std::uint32_t>{});
         s_->previous_border = params.border;
         // The requested level is the last one decoded; any other may be put off.
-        if (options.rebuild_coarser_levels || pending->lod <= options.finest_level)
+        if (options.rebuild_coarser_levels || pending->lod <= options.finest_level) {
           s_->rebuild(*pending, params, walk.header->kind, coarser, out.levels.size());
-        else
+        } else {
           s_->deferred = std::move(params);
+          s_->speculate(*pending);
+        }
       }
       pending->stream_bytes = c.offset + kChunkOverhead + c.length;
       out.levels.push_back(std::move(*pending));
