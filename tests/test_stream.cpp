@@ -368,6 +368,44 @@ TEST_CASE("several defects: at once in stream order, or exactly what decode() re
   CHECK(streamed(bad_magic.data(), bad_magic.size(), one, small).status == Status::bad_magic);
 }
 
+TEST_CASE("decode() on two threads: the base layer's neighbour searches run ahead, the same points and errors") {
+  // Depths of the ranked base layer with at least 2,048 nodes have their
+  // nearest-node searches made by a helper thread ahead of the decoding
+  // (pointset/octree.cpp, SearchAhead). A 1-level torus of about 6,000
+  // points has several such depths; damaged base layers (valid CRCs) make
+  // the decoding stop, or decode other points, partway through a depth
+  // whose searches are running ahead.
+  const Bytes good = encode_sample(samples::torus(120, 50), 1);
+  std::size_t base = 0;
+  for (std::size_t c : chunk_boundaries(good))
+    if (std::string(reinterpret_cast<const char*>(good.data() + c), 4) == "BASE") base = c;
+  REQUIRE(base > 0);
+  REQUIRE(good[base + 8] >= 1);  // a ranked coder
+  DecodeOptions one, two;
+  two.threads = 2;
+  one.reconstruct = two.reconstruct = false;
+  const Outcome ref = whole(good.data(), good.size(), one);
+  REQUIRE(ref.status == Status::ok);
+  REQUIRE(ref.decoded.finest().points.size() == 6000);
+  check_same(whole(good.data(), good.size(), two), ref);
+  const std::uint32_t len = chunk_length(good, base);
+  std::mt19937_64 rng(5);
+  std::size_t errors = 0, other_points = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    CAPTURE(trial);
+    Bytes b = good;
+    // In the second half of the payload: the deepest depths, the largest.
+    const std::size_t pos = base + 8 + len / 2 + std::uniform_int_distribution<std::size_t>(0, len / 2 - 1)(rng);
+    b[pos] = static_cast<std::uint8_t>(b[pos] ^ (1u << std::uniform_int_distribution<int>(0, 7)(rng)));
+    fix_crc(b, base);
+    const Outcome a = whole(b.data(), b.size(), one);
+    errors += a.status != Status::ok;
+    other_points += a.status == Status::ok && a.decoded.finest().points != ref.decoded.finest().points;
+    check_same(whole(b.data(), b.size(), two), a);
+  }
+  CHECK(errors >= 8);
+}
+
 TEST_CASE("decode() on two threads: the same levels, simplices and errors as on one") {
   // Damaged content with valid CRCs (so that the chunks reach the decoder):
   // byte flips in one layer or side-information chunk, alone and together

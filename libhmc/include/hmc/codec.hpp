@@ -269,24 +269,28 @@ struct DecodeOptions {
   /// throw.
   std::function<void(int level, bool rebuilding)> progress = nullptr;
   /// Threads decode() may use, counting the caller's. With 2 or more (more
-  /// are not used), each level's reconstruction (spec section 11, after its
-  /// tetrahedralization) runs on a second thread while the next level's
-  /// points and tetrahedralization are decoded: on the four-level streams
-  /// of the Stanford bunny and the horse, 20 to 22 % less wall-clock time
-  /// for about the same CPU time (volumes, whose reconstruction is cheaper,
-  /// 7 to 12 %), and up to one more level's working memory at once (a
-  /// fifth to a third more peak memory there). Without
-  /// rebuild_coarser_levels, the second thread tetrahedralizes the coarser
-  /// levels while the finer levels' points are decoded, and the finest
-  /// level's tetrahedralization is built from the last of them, inserting
-  /// only the points added since: 12 to 16 % less wall-clock time on most
-  /// of the shared models' four-level streams, for 4 to 12 % more CPU time
-  /// and at most 1 MiB more peak memory. The output, errors included, is the
-  /// same, with one exception: under a max_memory so tight that building a
-  /// tetrahedralization from scratch exceeds it part-way, building it from
-  /// a coarser one may not, so two threads may decode a stream that one
-  /// refuses (never the reverse). StreamDecoder, which hands out each level
-  /// as it completes, uses one thread whatever this says.
+  /// are not used), a second thread takes:
+  /// - the base layer's nearest-node searches, ahead of its decoding
+  ///   (one-level streams of the shared models: 10 to 15 % less wall-clock
+  ///   time, 7 to 15 % more CPU time);
+  /// - each level's reconstruction (spec section 11, after its
+  ///   tetrahedralization), while the next level's points and
+  ///   tetrahedralization are decoded (four-level streams of the Stanford
+  ///   bunny and the horse: 20 to 22 % less wall-clock time, volumes 7 to
+  ///   12 %; up to one more level's working memory at once, a fifth to a
+  ///   third more peak memory there);
+  /// - without rebuild_coarser_levels, the coarser levels'
+  ///   tetrahedralizations, while the finer levels' points are decoded; the
+  ///   finest level's is built from the last of them, inserting only the
+  ///   points added since (with the searches, 16 to 22 % less wall-clock
+  ///   time on the bunny's and the horse's four-level streams, about 10 %
+  ///   more CPU time, at most 1 MiB more peak memory).
+  /// The output, errors included, is the same, with one exception: under a
+  /// max_memory so tight that building a tetrahedralization from scratch
+  /// exceeds it part-way, building it from a coarser one may not, so two
+  /// threads may decode a stream that one refuses (never the reverse).
+  /// StreamDecoder, which hands out each level as it completes, uses one
+  /// thread whatever this says.
   unsigned threads = 1;
 };
 

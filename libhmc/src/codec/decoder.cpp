@@ -399,7 +399,8 @@ bool ChunkDecoder::chunk_impl(const ChunkView& c) {
       if (options.progress) options.progress(level.lod, false);
       s_->reserve(counts[k] * kPointBytes, "level " + std::to_string(level.lod) + " (" + std::to_string(counts[k]) + " points)");
       if (k == 0) {
-        level.points = decode_base(c.payload, c.length, walk.quantizer->bits, counts.front(), walk.header->tables);
+        level.points = decode_base(c.payload, c.length, walk.quantizer->bits, counts.front(), walk.header->tables,
+                                   s_->overlap ? &s_->helpers : nullptr);
       } else {
         const auto& coarse = previous_points;
         const std::uint64_t n = counts[k] - counts[k - 1];

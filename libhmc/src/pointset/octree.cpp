@@ -3,7 +3,12 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <future>
+#include <memory>
+#include <thread>
 #include <numeric>
 #include <optional>
 #include <string>
@@ -13,6 +18,7 @@
 #include "pointset/lattice_neighbours.hpp"
 #include "pointset/plane_rank.hpp"
 #include "util/error.hpp"
+#include "util/helpers.hpp"
 #include "util/kdtree.hpp"
 #include "util/radix_sort.hpp"
 
@@ -189,7 +195,7 @@ constexpr int kCausalPoints = kMaxRankPoints;  // coder 3: the most points a nod
 // neighbours. `nodes` must outlive the object.
 class DepthNodes {
  public:
-  DepthNodes(const DepthNodes&) = delete;  // lattice_ refers to cells_
+  DepthNodes(const DepthNodes&) = delete;  // search_ refers to cells_
   DepthNodes& operator=(const DepthNodes&) = delete;
   DepthNodes(const std::vector<std::uint64_t>& nodes, int d, int q) : d_(d), q_(q) {
     const std::int64_t h = std::int64_t{1} << (q - d);
@@ -208,8 +214,19 @@ class DepthNodes {
       for (shift = 1; shift < d && LatticeNeighbours::density(nodes, d, shift) < kDenseBuckets; ++shift) {
       }
     }
-    lattice_.emplace(cells_, nodes, d, shift);
+    shift_ = shift;
+    keys_ = &nodes;
+    search_.lattice.emplace(cells_, nodes, d, shift);
   }
+
+  /// The state of one thread's searches (nearest()): the lattice's loaded
+  /// block and the k-d tree, built when first needed. DepthNodes keeps one
+  /// for the calls without it; another thread needs its own (start_search).
+  struct Search {
+    std::optional<LatticeNeighbours> lattice;
+    std::optional<KdTree<std::int64_t>> tree;
+  };
+  void start_search(Search& s) const { s.lattice.emplace(cells_, *keys_, d_, shift_); }
 
   /// The ranking of the children of node i (spec 8.2): by the plane through
   /// the k nearest node centres of the depth, the node's own included.
@@ -220,6 +237,16 @@ class DepthNodes {
            const std::uint8_t* causal = nullptr, bool quadric = false) const {
     int context = 0;
     keys(node, i, neighbours, gap > 0, context, causal, quadric).order(0u, gap, order);
+    return context;
+  }
+
+  /// rank() from node i's nearest nodes, found by nearest() beforehand.
+  int rank(std::uint64_t node, std::size_t i, const std::uint32_t* near, int found, std::array<int, 8>& order, int gap,
+           const std::uint8_t* causal, bool quadric) const {
+    std::array<Doubled, kCausalPoints> nb{};
+    const int count = expand(i, near, found, causal, nb);
+    int context = 0;
+    keys_of(node, nb, count, gap > 0, quadric, context).order(0u, gap, order);
     return context;
   }
 
@@ -248,14 +275,16 @@ class DepthNodes {
   /// (its own first), by (distance, index): indices into `near`; returns
   /// their number. The first k of them are the k nearest for any smaller k.
   using Near = std::array<std::uint32_t, kMaxNeighbours>;
-  int nearest(std::size_t i, int neighbours, Near& near) const {
+  int nearest(std::size_t i, int neighbours, Near& near) const { return nearest(i, neighbours, near.data(), search_); }
+  /// The same with another thread's search state (start_search()).
+  int nearest(std::size_t i, int neighbours, std::uint32_t* near, Search& s) const {
     const int k = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(neighbours), centres_.size()));
-    int found = lattice_ ? lattice_->nearest(i, k, near.data()) : -1;
+    int found = s.lattice ? s.lattice->nearest(i, k, near) : -1;
     if (found < 0) {
-      if (!tree_) tree_.emplace(centres_);
+      if (!s.tree) s.tree.emplace(centres_);
       std::array<KdTree<std::int64_t>::Hit, kMaxNeighbours> hits{};
-      found = tree_->nearest(centres_[i], k, hits.data());
-      for (int j = 0; j < found; ++j) near[static_cast<std::size_t>(j)] = hits[static_cast<std::size_t>(j)].index;
+      found = s.tree->nearest(centres_[i], k, hits.data());
+      for (int j = 0; j < found; ++j) near[j] = hits[static_cast<std::size_t>(j)].index;
     }
     return found;
   }
@@ -263,10 +292,14 @@ class DepthNodes {
   /// points() from the first `found` of node i's nearest nodes.
   int expand(std::size_t i, const Near& near, int found, const std::uint8_t* causal,
              std::array<Doubled, kCausalPoints>& nb) const {
+    return expand(i, near.data(), found, causal, nb);
+  }
+  int expand(std::size_t i, const std::uint32_t* near, int found, const std::uint8_t* causal,
+             std::array<Doubled, kCausalPoints>& nb) const {
     int count = 0;
     const std::int64_t h = std::int64_t{1} << (q_ - d_);
     for (int j = 0; j < found && count < kCausalPoints; ++j) {
-      const std::uint32_t at = near[static_cast<std::size_t>(j)];
+      const std::uint32_t at = near[j];
       if (causal && at < i) {
         // Child c's centre, (2X + bit)·h + h/2 per axis (spec 8A.1).
         for (unsigned occ = causal[at]; occ != 0 && count < kCausalPoints; occ &= occ - 1) {
@@ -322,11 +355,94 @@ class DepthNodes {
  private:
   static constexpr double kDenseCells = 16.0;    // nodes per occupied block of 8^3 cells
   static constexpr double kDenseBuckets = 64.0;   // nodes per occupied block of 8^3 buckets
-  int d_, q_;
+  int d_, q_, shift_ = 0;
+  const std::vector<std::uint64_t>* keys_ = nullptr;  // the depth's nodes (Morton keys), which outlive it
   std::vector<GridPoint> cells_;
   std::vector<KdTree<std::int64_t>::Point> centres_;
-  mutable std::optional<LatticeNeighbours> lattice_;
-  mutable std::optional<KdTree<std::int64_t>> tree_;
+  mutable Search search_;
+};
+
+// The nearest nodes of a ranked depth's nodes, searched ahead on a helper
+// thread while this one decodes (decode_nodes). A node's nearest nodes depend
+// on the depth's node set alone; only the rest of its ranking (the causal
+// points, the fit) waits for the symbols before it. The two threads claim
+// nodes in order from one counter: the helper the next unclaimed one, at
+// most kLead ahead of this thread, and this thread the node it is at when
+// the helper has not claimed it yet; it waits only for a node the helper is
+// searching at that moment. Each node is searched once, by one of them, so
+// the result is that of one thread. Without a helper, every search is made
+// here, node by node.
+class SearchAhead {
+ public:
+  static constexpr std::size_t kLead = 4096;      // nodes the helper may be ahead (its ring of results)
+  static constexpr std::size_t kMinNodes = 2048;  // smaller depths: not worth a thread
+  SearchAhead(const DepthNodes& depth, std::size_t count, int neighbours, HelperBudget* helpers)
+      : depth_(depth), count_(count), neighbours_(neighbours) {
+    if (!helpers || count < kMinNodes) return;
+    depth_.start_search(search_);
+    near_.resize(kLead * kMaxNeighbours);
+    found_.resize(kLead);
+    stamp_ = std::make_unique<std::atomic<std::size_t>[]>(kLead);
+    for (std::size_t s = 0; s < kLead; ++s) stamp_[s].store(0, std::memory_order_relaxed);
+    job_ = helpers->try_run([this] { run(); });
+  }
+  SearchAhead(const SearchAhead&) = delete;
+  SearchAhead& operator=(const SearchAhead&) = delete;
+  ~SearchAhead() {
+    stop_.store(true, std::memory_order_relaxed);
+    if (job_.valid()) job_.wait();
+  }
+
+  /// Node i's nearest nodes (DepthNodes::nearest), for i = 0, 1, 2, ... in turn.
+  int nearest(std::size_t i, DepthNodes::Near& near) {
+    if (!job_.valid()) return depth_.nearest(i, neighbours_, near);
+    at_.store(i, std::memory_order_release);  // nodes before i are done with: their slots are free
+    std::size_t next = next_.load(std::memory_order_acquire);
+    while (next <= i)
+      if (next_.compare_exchange_weak(next, i + 1, std::memory_order_acq_rel)) return depth_.nearest(i, neighbours_, near);
+    // The helper has claimed node i: its result is there or about to be.
+    const std::size_t slot = i % kLead;
+    while (stamp_[slot].load(std::memory_order_acquire) != i + 1) {
+      if (failed_.load(std::memory_order_acquire)) return depth_.nearest(i, neighbours_, near);
+      std::this_thread::yield();
+    }
+    const int found = found_[slot];
+    std::copy_n(near_.begin() + static_cast<std::ptrdiff_t>(slot * kMaxNeighbours), found, near.begin());
+    return found;
+  }
+
+ private:
+  void run() {
+    while (!stop_.load(std::memory_order_relaxed)) {
+      std::size_t j = next_.load(std::memory_order_acquire);
+      if (j >= count_) return;
+      if (j >= at_.load(std::memory_order_acquire) + kLead) {  // the ring is full
+        std::this_thread::sleep_for(std::chrono::microseconds(50));
+        continue;
+      }
+      if (!next_.compare_exchange_weak(j, j + 1, std::memory_order_acq_rel)) continue;
+      const std::size_t slot = j % kLead;
+      try {
+        found_[slot] = static_cast<std::int8_t>(depth_.nearest(j, neighbours_, near_.data() + slot * kMaxNeighbours, search_));
+      } catch (...) {  // out of memory for its k-d tree: the other thread searches for itself
+        failed_.store(true, std::memory_order_release);
+        return;
+      }
+      stamp_[slot].store(j + 1, std::memory_order_release);
+    }
+  }
+
+  const DepthNodes& depth_;
+  std::size_t count_;
+  int neighbours_;
+  DepthNodes::Search search_;  // the helper's
+  std::vector<std::uint32_t> near_;  // kMaxNeighbours per slot; node j in slot j % kLead
+  std::vector<std::int8_t> found_;
+  std::unique_ptr<std::atomic<std::size_t>[]> stamp_;  // j + 1 once node j's result is in its slot
+  std::atomic<std::size_t> next_{0};  // the first node neither thread has claimed
+  std::atomic<std::size_t> at_{0};    // the node this thread is at
+  std::atomic<bool> stop_{false}, failed_{false};
+  std::future<void> job_;
 };
 
 // Coder 3 with `classes` contexts per ranked depth, from the plain and
@@ -611,7 +727,7 @@ constexpr std::array<std::uint8_t, 256> kChildCount = [] {
 std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     std::vector<std::vector<TableCode>>& codes, const std::vector<bool>& ranked,
                                     int neighbours, const std::vector<int>& gaps, bool causal = false,
-                                    const std::vector<bool>& quadric = {}) {
+                                    const std::vector<bool>& quadric = {}, HelperBudget* helpers = nullptr) {
   std::vector<std::uint64_t> nodes{0}, next;
   std::vector<std::uint8_t> occupancies;  // coder 3: the depth's occupancies so far
   std::array<int, 8> order{};
@@ -621,11 +737,17 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
     next.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(n, 8 * std::uint64_t{nodes.size()})));
     auto& table = codes[static_cast<std::size_t>(d)];
     std::optional<DepthNodes> depth;
-    if (ranked[static_cast<std::size_t>(d)]) depth.emplace(nodes, d, q);
+    std::optional<SearchAhead> searches;  // after `depth`, which it reads: destroyed first
+    if (ranked[static_cast<std::size_t>(d)]) {
+      depth.emplace(nodes, d, q);
+      searches.emplace(*depth, nodes.size(), neighbours, helpers);
+    }
+    DepthNodes::Near near{};
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       std::uint32_t occ = 0;
       if (depth) {
-        const int context = depth->rank(nodes[i], i, neighbours, order, gaps[static_cast<std::size_t>(d)],
+        const int found = searches->nearest(i, near);
+        const int context = depth->rank(nodes[i], i, near.data(), found, order, gaps[static_cast<std::size_t>(d)],
                                         causal ? occupancies.data() : nullptr,
                                         causal && quadric[static_cast<std::size_t>(d)]);
         const std::uint32_t s = table[std::min<std::size_t>(static_cast<std::size_t>(context), table.size() - 1)].decode(in);
@@ -652,7 +774,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
 // quadric flag per ranked depth, and the causal points), 4 (coder 3 with
 // a pairing flag per table) or 5 (coder 4 with 5-bit weights).
 std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form,
-                                     std::uint8_t coder) {
+                                     std::uint8_t coder, HelperBudget* helpers) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
@@ -686,7 +808,7 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
         fail(Status::bad_layer, what + " context " + std::to_string(j) + ": a one-symbol code at a ranked depth");
     }
   }
-  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps, causal, quadric);
+  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps, causal, quadric, helpers);
 }
 
 }  // namespace
@@ -716,11 +838,12 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
   return out;
 }
 
-std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form) {
+std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form,
+                                   HelperBudget* helpers) {
   if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
   if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n, form);
   if (data[0] >= kRankedCoder && data[0] <= kFarCoder)
-    return decode_ranked(data + 1, size - 1, q, n, form, data[0]);
+    return decode_ranked(data + 1, size - 1, q, n, form, data[0], helpers);
   fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
 }
 

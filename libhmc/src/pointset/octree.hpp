@@ -10,6 +10,7 @@
 
 #include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
+#include "util/helpers.hpp"
 #include "util/morton.hpp"
 
 namespace hmc::detail {
@@ -44,8 +45,10 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 /// Decode a BASE payload (coder byte first) of exactly `n` points, in
 /// canonical order; bad_layer for an unknown coder.
 /// `form`: the stream's code-length table syntax (HEAD flag bit 0).
+/// `helpers`: where one is free, the ranked coders' nearest-node searches
+/// run a chunk of nodes ahead on it (same result).
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n,
-                                   TableForm form = TableForm::deltas);
+                                   TableForm form = TableForm::deltas, HelperBudget* helpers = nullptr);
 
 /// The point of a Morton key of depth q (the inverse of morton_key,
 /// util/morton.hpp).
