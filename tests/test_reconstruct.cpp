@@ -1269,3 +1269,46 @@ TEST_CASE("boundary faces of tetrahedra: the faces only one of them has, facing 
   const auto three = boundary_faces(p, {{0, 1, 2, 3}, {4, 2, 1, 3}, {1, 2, 3, 0}});
   CHECK(three.size() == 3);
 }
+
+TEST_CASE("on two threads, the tetrahedralization's verification and the rule's loops give the same results") {
+  // delaunay() and the rule split their per-element loops in two halves
+  // when a helper is free (util/helpers.hpp, split_range) and the loop is
+  // long enough: 16,384 tetrahedra for the verification, 8,192 vertices,
+  // tetrahedra or faces for the rule. A 4,000-point torus has enough.
+  const auto e = encode(samples::torus(100, 40)).value();
+  const auto& pts = e.points;
+  HelperBudget two(2);
+  const auto dt = delaunay(pts);
+  REQUIRE(dt.tets.size() >= 20000);
+  const auto dt2 = delaunay(pts, ~std::uint64_t{0}, &two);
+  CHECK(dt2.tets == dt.tets);
+  CHECK(dt2.neighbors == dt.neighbors);
+  // Built from a subset: the same again.
+  std::vector<GridPoint> sub;
+  for (std::size_t i = 0; i < pts.size(); i += 2) sub.push_back(pts[i]);
+  const auto refined = delaunay_refine(pts, sub, delaunay(sub), ~std::uint64_t{0}, &two);
+  CHECK(refined.tets == dt.tets);
+  for (std::uint32_t rank : {1u, 6u}) {
+    CAPTURE(rank);
+    const auto scale = local_scale(pts, dt, rank);
+    CHECK(local_scale(pts, dt, rank, &two) == scale);
+    const std::array<std::uint32_t, kFilterCount> strong{256, 64, 512, 1, 1024, 75};
+    for (int mask : {0, 1, 2, 4, 8, 16, 32, 63}) {
+      CAPTURE(mask);
+      ReconParams p;
+      p.scale_rank = rank;
+      p.multipliers = {1024};
+      for (int f = 0; f < kFilterCount; ++f)
+        if (mask >> f & 1) p.filters[static_cast<std::size_t>(f)] = f == kLone ? 1 : strong[static_cast<std::size_t>(f)];
+      const auto flags = candidate_flags(pts, dt, scale, p);
+      CHECK(candidate_flags(pts, dt, scale, p, &two) == flags);
+      std::vector<std::uint8_t> cand;
+      CHECK(rule_labels(pts, dt, scale, p, &cand, &two) == rule_labels(pts, dt, scale, p));
+      CHECK(cand == flags);
+      const auto one_rec = reconstruct(pts, dt, Kind::surface, p);
+      const auto two_rec = reconstruct(pts, dt, Kind::surface, p, &two);
+      CHECK(two_rec.triangles == one_rec.triangles);
+      CHECK(two_rec.inside == one_rec.inside);
+    }
+  }
+}

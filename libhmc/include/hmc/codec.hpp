@@ -270,21 +270,21 @@ struct DecodeOptions {
   std::function<void(int level, bool rebuilding)> progress = nullptr;
   /// Threads decode() may use, counting the caller's. With 2 or more (more
   /// are not used), a second thread takes:
-  /// - the base layer's nearest-node searches, ahead of its decoding
-  ///   (one-level streams of the shared models: 10 to 15 % less wall-clock
-  ///   time, 7 to 15 % more CPU time);
-  /// - each level's reconstruction (spec section 11, after its
+  /// - the base layer's nearest-node searches, ahead of its decoding;
+  /// - half of the long loops of each tetrahedralization's verification and
+  ///   of the last level's reconstruction;
+  /// - each other level's reconstruction (spec section 11, after its
   ///   tetrahedralization), while the next level's points and
-  ///   tetrahedralization are decoded (four-level streams of the Stanford
-  ///   bunny and the horse: 20 to 22 % less wall-clock time, volumes 7 to
-  ///   12 %; up to one more level's working memory at once, a fifth to a
-  ///   third more peak memory there);
+  ///   tetrahedralization are decoded (up to one more level's working
+  ///   memory at once: a fifth to a third more peak memory);
   /// - without rebuild_coarser_levels, the coarser levels'
   ///   tetrahedralizations, while the finer levels' points are decoded; the
   ///   finest level's is built from the last of them, inserting only the
-  ///   points added since (with the searches, 16 to 22 % less wall-clock
-  ///   time on the bunny's and the horse's four-level streams, about 10 %
-  ///   more CPU time, at most 1 MiB more peak memory).
+  ///   points added since.
+  /// Less wall-clock time on the shared models (2026-11-25): one-level
+  /// streams 14 to 21 %, four-level streams 24 to 25 % without
+  /// rebuild_coarser_levels and 23 to 29 % with it, for 4 to 16 % more CPU
+  /// time.
   /// The output, errors included, is the same, with one exception: under a
   /// max_memory so tight that building a tetrahedralization from scratch
   /// exceeds it part-way, building it from a coarser one may not, so two

@@ -163,6 +163,7 @@ struct ChunkDecoder::State {
   // the last level, whose reconstruction waits until it turns out to be the
   // finest one decoded (at finish(), when the stream ends early).
   std::optional<ReconParams> deferred;
+  bool finishing = false;  // in finish(): no level follows
 
   // Rebuild `level`'s connectivity from its side information. `coarser` is
   // the level decoded before it, if any: when its tetrahedralization was
@@ -288,7 +289,9 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
   reserve(n * kPointBytes, what);
   const std::uint64_t room = options.limits.max_memory - memory - n * kPointBytes;
   // The previous level is the coarser one, and its points a subset; so are
-  // those of a speculative tetrahedralization of a coarser level.
+  // those of a speculative tetrahedralization of a coarser level. A helper
+  // not busy with a reconstruction in flight takes half of the verification.
+  HelperBudget* spare = overlap ? &helpers : nullptr;
   Tetrahedralization dt;
   if (early) {
     coarse.reset();
@@ -298,20 +301,20 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
     // outcome is the sequential one.
     try {
       if (early->lod == level.lod) dt = std::move(early->dt);
-      else dt = delaunay_refine(level.points, *early->points, std::move(early->dt), room / kTetBytes);
+      else dt = delaunay_refine(level.points, *early->points, std::move(early->dt), room / kTetBytes, spare);
     } catch (...) {
       early.reset();
-      dt = delaunay(level.points, room / kTetBytes);
+      dt = delaunay(level.points, room / kTetBytes, spare);
     }
     early.reset();
   } else if (coarse && coarser && coarser->lod == level.lod + 1) {
     // Handed over, or copied while the reconstruction in flight reads it.
     Tetrahedralization sub = in_flight ? *coarse : std::move(*coarse);
     coarse.reset();
-    dt = delaunay_refine(level.points, coarser->points, std::move(sub), room / kTetBytes);
+    dt = delaunay_refine(level.points, coarser->points, std::move(sub), room / kTetBytes, spare);
   } else {
     coarse.reset();
-    dt = delaunay(level.points, room / kTetBytes);
+    dt = delaunay(level.points, room / kTetBytes, spare);
   }
   if (in_flight) {
     join();
@@ -320,7 +323,11 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
   const std::uint64_t keep = dt.tets.size() * 2 * sizeof(dt.tets[0]);
   const std::uint64_t max = options.limits.max_memory;
   auto shared = std::make_shared<Tetrahedralization>(std::move(dt));
-  if (overlap) {
+  // The last level rebuilt (the requested one, or the last of a stream that
+  // ends early) is reconstructed here, with the helper taking half of its
+  // loops; any other level on the helper, while this thread goes on.
+  const bool last = level.lod <= options.finest_level || finishing;
+  if (overlap && !last) {
     // The points are copied: the level moves into out.levels meanwhile.
     auto points = std::make_shared<const std::vector<GridPoint>>(level.points);
     std::shared_ptr<const Tetrahedralization> tets = shared;
@@ -328,7 +335,7 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
     auto f = helpers.try_run([points, tets, kind, params] { return reconstruct(*points, *tets, kind, params); });
     if (f.valid()) in_flight = InFlight{index, std::move(f)};
   }
-  if (!in_flight) store(level, reconstruct(level.points, *shared, kind, params));
+  if (!in_flight) store(level, reconstruct(level.points, *shared, kind, params, spare));
   if (level.lod > std::max(options.finest_level, 0) && memory <= max && keep <= max - memory) {
     previous_dt = std::move(shared);
     previous_dt_bytes = keep;
@@ -491,6 +498,7 @@ void ChunkDecoder::finish_impl(const ContainerView& view) {
   Decoded& out = s_->out;
   // A level whose reconstruction was put off is the finest one decoded
   // when no finer level followed it.
+  s_->finishing = true;
   if (s_->deferred && !out.levels.empty()) {
     const std::size_t k = out.levels.size();
     s_->rebuild(out.levels.back(), *s_->deferred, walk.header->kind, k > 1 ? &out.levels[k - 2] : nullptr, k - 1);

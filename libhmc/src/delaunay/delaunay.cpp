@@ -84,7 +84,8 @@ void sort_tets(TetList& tets, TetList& nb, std::size_t num_points) {
 
 // The checks of certificate_error() on tetrahedra in canonical vertex order
 // (list in any order) with their claimed adjacency, which is verified too.
-std::string check(const std::vector<GridPoint>& pts, const TetList& tets, const TetList& nb) {
+std::string check(const std::vector<GridPoint>& pts, const TetList& tets, const TetList& nb,
+                  HelperBudget* helpers = nullptr) {
   const std::size_t nt = tets.size();
   if (nb.size() != nt) return "no adjacency";
 
@@ -99,36 +100,49 @@ std::string check(const std::vector<GridPoint>& pts, const TetList& tets, const 
   };
   std::vector<Cell> cells(nt);
   for (std::size_t t = 0; t < nt; ++t) cells[t] = {tets[t], nb[t]};
-  std::size_t links = 0, pairs = 0;
-  constexpr std::size_t kAhead = 6;
-  for (std::size_t t = 0; t < nt; ++t) {
-    if (t + kAhead < nt)
-      for (std::uint32_t w : cells[t + kAhead].n)
-        if (w != kNoTet && w < nt) __builtin_prefetch(&cells[w]);
-    const auto& T = cells[t].v;
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = cells[t].n[k];
-      if (u == kNoTet) continue;
-      ++links;
-      if (u < t) continue;
-      if (u >= nt || u == t) return "bad adjacency";
-      const Cell& C = cells[u];
-      int j = 0;
-      while (j < 4 && C.n[j] != t) ++j;
-      if (j == 4) return "asymmetric adjacency";
-      const auto& U = C.v;
-      const int* f = kFaceVertices[k];
-      const int* g = kFaceVertices[j];
-      int i = 0;
-      while (i < 3 && U[g[i]] != T[f[0]]) ++i;
-      if (i == 3 || U[g[(i + 1) % 3]] != T[f[2]] || U[g[(i + 2) % 3]] != T[f[1]])
-        return "neighbours do not share a face in opposite orientations";
-      if (insphere_perturbed(pts, {T[0], T[1], T[2], T[3], U[j]}) >= 0)
-        return "face not locally Delaunay: tet " + std::to_string(t) + ", point " + std::to_string(U[j]);
-      ++pairs;
+  // The tetrahedra [begin, end): the first failure among them, links and
+  // pairs counted. Two ranges may run on two threads; the first range's
+  // failure is the one a single pass would meet first.
+  struct Part {
+    std::string error;
+    std::size_t links = 0, pairs = 0;
+  };
+  auto faces = [&](std::size_t begin, std::size_t end, Part& part) {
+    constexpr std::size_t kAhead = 6;
+    for (std::size_t t = begin; t < end; ++t) {
+      if (t + kAhead < end)
+        for (std::uint32_t w : cells[t + kAhead].n)
+          if (w != kNoTet && w < nt) __builtin_prefetch(&cells[w]);
+      const auto& T = cells[t].v;
+      for (int k = 0; k < 4; ++k) {
+        const std::uint32_t u = cells[t].n[k];
+        if (u == kNoTet) continue;
+        ++part.links;
+        if (u < t) continue;
+        if (u >= nt || u == t) return void(part.error = "bad adjacency");
+        const Cell& C = cells[u];
+        int j = 0;
+        while (j < 4 && C.n[j] != t) ++j;
+        if (j == 4) return void(part.error = "asymmetric adjacency");
+        const auto& U = C.v;
+        const int* f = kFaceVertices[k];
+        const int* g = kFaceVertices[j];
+        int i = 0;
+        while (i < 3 && U[g[i]] != T[f[0]]) ++i;
+        if (i == 3 || U[g[(i + 1) % 3]] != T[f[2]] || U[g[(i + 2) % 3]] != T[f[1]])
+          return void(part.error = "neighbours do not share a face in opposite orientations");
+        if (insphere_perturbed(pts, {T[0], T[1], T[2], T[3], U[j]}) >= 0)
+          return void(part.error = "face not locally Delaunay: tet " + std::to_string(t) + ", point " +
+                                   std::to_string(U[j]));
+        ++part.pairs;
+      }
     }
-  }
-  if (links != 2 * pairs) return "asymmetric adjacency";
+  };
+  Part first, second;
+  split_range(helpers, nt, 16384, [&](std::size_t begin, std::size_t end) { faces(begin, end, begin == 0 ? first : second); });
+  if (!first.error.empty()) return first.error;
+  if (!second.error.empty()) return second.error;
+  if (first.links + second.links != 2 * (first.pairs + second.pairs)) return "asymmetric adjacency";
 
   // Hull: a closed, connected, locally convex surface with Euler
   // characteristic 2, and every point a vertex.
@@ -183,7 +197,8 @@ std::string check(const std::vector<GridPoint>& pts, const TetList& tets, const 
 
 // Puts a backend's output in canonical form and order (with its adjacency,
 // building it if the backend gave none) and checks it.
-std::string verify_backend_output(const std::vector<GridPoint>& pts, TetList& tets, TetList& nb) {
+std::string verify_backend_output(const std::vector<GridPoint>& pts, TetList& tets, TetList& nb,
+                                  HelperBudget* helpers = nullptr) {
   if (tets.empty()) return "the backend failed";
   if (!nb.empty() && nb.size() != tets.size()) return "bad adjacency size";
   for (std::size_t t = 0; t < tets.size(); ++t) {
@@ -203,9 +218,9 @@ std::string verify_backend_output(const std::vector<GridPoint>& pts, TetList& te
   if (nb.empty()) {
     sort_tets(tets, nb, pts.size());
     if (!build_adjacency(tets, pts.size(), nb, &err)) return err;
-    err = check(pts, tets, nb);
+    err = check(pts, tets, nb, helpers);
   } else {
-    err = check(pts, tets, nb);  // before sorting: the backend's order is more local
+    err = check(pts, tets, nb, helpers);  // before sorting: the backend's order is more local
     sort_tets(tets, nb, pts.size());
   }
   if (!err.empty()) return err;
@@ -269,10 +284,10 @@ std::uint64_t native_cap(std::size_t n, std::uint64_t max_tets) {
 }  // namespace
 
 Tetrahedralization delaunay_refine(const std::vector<GridPoint>& points, const std::vector<GridPoint>& sub_points,
-                                   Tetrahedralization&& sub, std::uint64_t max_tets) {
+                                   Tetrahedralization&& sub, std::uint64_t max_tets, HelperBudget* helpers) {
   if (sub.tets.empty()) {
     sub = {};
-    return delaunay(points, max_tets);
+    return delaunay(points, max_tets, helpers);
   }
   check_input(points);
   // Position of each subset point in `points` (both ascending).
@@ -286,7 +301,7 @@ Tetrahedralization delaunay_refine(const std::vector<GridPoint>& points, const s
   }
   TetList tets, nb;
   backend::native_refine(points, index, sub.tets, sub.neighbors, tets, nb, native_cap(points.size(), max_tets));
-  const std::string error = verify_backend_output(points, tets, nb);
+  const std::string error = verify_backend_output(points, tets, nb, helpers);
   if (!error.empty()) fail(Status::internal_error, "delaunay: refining a tetrahedralization failed: " + error);
   Tetrahedralization out;
   out.tets = std::move(tets);
@@ -294,7 +309,7 @@ Tetrahedralization delaunay_refine(const std::vector<GridPoint>& points, const s
   return out;
 }
 
-Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets) {
+Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets, HelperBudget* helpers) {
   check_input(points);
   Tetrahedralization out;
   if (!spans_3d(points)) return out;
@@ -304,7 +319,7 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t 
   const bool bounded = max_delaunay_tets(points.size()) <= max_tets;
   if (!bounded) error = "TetGen not run: its worst case exceeds the limit of " + std::to_string(max_tets) + " tetrahedra";
   if (bounded && backend::tetgen(points, tets, nb)) {
-    error = verify_backend_output(points, tets, nb);
+    error = verify_backend_output(points, tets, nb, helpers);
     if (error.empty()) {
       out.tets = std::move(tets);
       out.neighbors = std::move(nb);
@@ -314,7 +329,7 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t 
   tets.clear();
   nb.clear();
   backend::native(points, tets, nb, native_cap(points.size(), max_tets));
-  const std::string native_error = verify_backend_output(points, tets, nb);
+  const std::string native_error = verify_backend_output(points, tets, nb, helpers);
   if (!native_error.empty())
     fail(Status::internal_error, "delaunay: no backend produced a verified tetrahedralization (TetGen: " + error +
                                      "; native: " + native_error + ")");

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "hmc/codec.hpp"
+#include "util/helpers.hpp"
 
 namespace hmc::detail {
 
@@ -77,7 +78,11 @@ struct Tetrahedralization {
 /// (always, by default). Otherwise the native backend builds the same
 /// canonical tetrahedralization and fails with limit_exceeded as soon as it
 /// would need more than max_tets tetrahedra (plus the hull faces).
-Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets = ~std::uint64_t{0});
+///
+/// `helpers`: where one is free, it takes half of the verification (the
+/// same result).
+Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t max_tets = ~std::uint64_t{0},
+                            HelperBudget* helpers = nullptr);
 
 /// The same tetrahedralization as delaunay(points, max_tets), built from
 /// that of a subset: `sub` must be delaunay(sub_points) for distinct grid
@@ -90,7 +95,8 @@ Tetrahedralization delaunay(const std::vector<GridPoint>& points, std::uint64_t 
 /// (a flat subset) this is delaunay(points, max_tets). Errors as
 /// delaunay(), and internal_error when sub_points is not a subset.
 Tetrahedralization delaunay_refine(const std::vector<GridPoint>& points, const std::vector<GridPoint>& sub_points,
-                                   Tetrahedralization&& sub, std::uint64_t max_tets = ~std::uint64_t{0});
+                                   Tetrahedralization&& sub, std::uint64_t max_tets = ~std::uint64_t{0},
+                                   HelperBudget* helpers = nullptr);
 
 /// n(n-3)/2, the most tetrahedra a Delaunay tetrahedralization of n >= 4
 /// points can have (the upper bound theorem applied to the lifted points;

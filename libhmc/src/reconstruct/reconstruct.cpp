@@ -45,6 +45,10 @@ unsigned candidate_faces(const std::vector<GridPoint>& pts, const std::vector<st
 
 __extension__ typedef unsigned __int128 U128;
 
+// Below this many vertices, tetrahedra or faces, a loop is not split
+// between two threads (split_range): a thread costs tens of microseconds.
+constexpr std::size_t kSplitElements = 8192;
+
 // Exact parts of a triangle: squared edge lengths e[i] (edge opposite
 // vertex i) and D = |(q − p) × (r − p)|² (= 16·area²/4), so that
 // R² = N / (4D) with N = e0·e1·e2 (num(), computed when needed).
@@ -81,7 +85,8 @@ std::uint64_t lo(U128 x) { return static_cast<std::uint64_t>(x); }
 // the edge test. `cand` is indexed by 4·tet + local face and is updated on
 // both sides of every face.
 void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& dt,
-                   const std::vector<std::uint64_t>& scale, const ReconParams& p, std::vector<std::uint8_t>& cand) {
+                   const std::vector<std::uint64_t>& scale, const ReconParams& p, std::vector<std::uint8_t>& cand,
+                   HelperBudget* helpers) {
   const auto& th = p.filters;
   const std::size_t nt = dt.tets.size();
   // Unique faces from the adjacency: a face is listed at the first of its
@@ -115,20 +120,24 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
   // four times the face itself, at the moment of a decoder's peak.
   auto parts = [&](std::uint32_t i) { return parts_of(pts, faces[i]); };
   std::vector<std::uint8_t> keep(nf, 1);
-  for (std::size_t i = 0; i < nf; ++i) {
-    const auto& f = faces[i];
-    const TriangleParts t = parts_of(pts, f);
-    const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
-    const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
-    // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
-    if (th[kCircleRadius] && compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
-      keep[i] = 0;
-    // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
-    if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
-    // (c) density: 256·D <= T·s² (a face much larger than the local spacing squared).
-    if (th[kDensity] && compare(U256::from(256).mul(hi(t.d), lo(t.d)), U256::from(smin).mul(smin).mul(th[kDensity])) > 0)
-      keep[i] = 0;
-  }
+  split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto& f = faces[i];
+      const TriangleParts t = parts_of(pts, f);
+      const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
+      const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
+      // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
+      if (th[kCircleRadius] &&
+          compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
+        keep[i] = 0;
+      // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
+      if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
+      // (c) density: 256·D <= T·s² (a face much larger than the local spacing squared).
+      if (th[kDensity] &&
+          compare(U256::from(256).mul(hi(t.d), lo(t.d)), U256::from(smin).mul(smin).mul(th[kDensity])) > 0)
+        keep[i] = 0;
+    }
+  });
   // Edge adjacency among the faces kept so far, for the neighbour filters.
   const bool neighbours = th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio];
   if (neighbours) {
@@ -254,33 +263,36 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     std::vector<std::uint64_t>().swap(keys);
     std::vector<EdgeRef>().swap(wide);
     std::vector<std::uint8_t> next = keep;
-    for (std::uint32_t f = 0; f < nf; ++f) {
-      if (!keep[f]) continue;
-      // (d) lone triangle: no edge shared with another kept face.
-      if (th[kLone] && !has[f]) next[f] = 0;
-      if (!has[f]) continue;
-      const TriangleParts tf = parts(f);
-      // (e) neighbour circle radius ratio: 256·R²(f) <= T·R²(g), g the
-      // neighbour of largest circumradius: 256·N_f·D_g <= T·N_g·D_f.
-      if (th[kNeighbourRadius]) {
-        const TriangleParts tg = parts(max_r[f]);
-        // A collinear neighbour (D_g = 0) has an infinite circumradius: keep.
-        if (tg.d != 0 && (tf.d == 0 || compare(tf.num().mul(hi(tg.d), lo(tg.d)).mul(256),
-                                               tg.num().mul(hi(tf.d), lo(tf.d)).mul(th[kNeighbourRadius])) > 0))
-          next[f] = 0;
+    split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
+      for (auto f = static_cast<std::uint32_t>(begin); f < end; ++f) {
+        if (!keep[f]) continue;
+        // (d) lone triangle: no edge shared with another kept face.
+        if (th[kLone] && !has[f]) next[f] = 0;
+        if (!has[f]) continue;
+        const TriangleParts tf = parts(f);
+        // (e) neighbour circle radius ratio: 256·R²(f) <= T·R²(g), g the
+        // neighbour of largest circumradius: 256·N_f·D_g <= T·N_g·D_f.
+        if (th[kNeighbourRadius]) {
+          const TriangleParts tg = parts(max_r[f]);
+          // A collinear neighbour (D_g = 0) has an infinite circumradius: keep.
+          if (tg.d != 0 && (tf.d == 0 || compare(tf.num().mul(hi(tg.d), lo(tg.d)).mul(256),
+                                                 tg.num().mul(hi(tf.d), lo(tf.d)).mul(th[kNeighbourRadius])) > 0))
+            next[f] = 0;
+        }
+        // (f) neighbour min/max edge ratio: 256·r(f) >= T·r(h), h the
+        // neighbour with the largest ratio r = Lmin²/Lmax².
+        if (th[kNeighbourRatio]) {
+          const TriangleParts tr = parts(max_ratio[f]);
+          const auto& x = tf.e;
+          const auto& y = tr.e;
+          const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
+          const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
+          if (compare(U256::from(256).mul(hi(xn * yd), lo(xn * yd)),
+                      U256::from(th[kNeighbourRatio]).mul(hi(yn * xd), lo(yn * xd))) < 0)
+            next[f] = 0;
+        }
       }
-      // (f) neighbour min/max edge ratio: 256·r(f) >= T·r(h), h the
-      // neighbour with the largest ratio r = Lmin²/Lmax².
-      if (th[kNeighbourRatio]) {
-        const TriangleParts tr = parts(max_ratio[f]);
-        const auto& x = tf.e;
-        const auto& y = tr.e;
-        const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
-        const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
-        if (compare(U256::from(256).mul(hi(xn * yd), lo(xn * yd)), U256::from(th[kNeighbourRatio]).mul(hi(yn * xd), lo(yn * xd))) < 0)
-          next[f] = 0;
-      }
-    }
+    });
     keep.swap(next);
   }
   for (std::size_t f = 0; f < nf; ++f)
@@ -674,7 +686,7 @@ int defects_of_faces(bool wanted, DefectScratch& work, bool* on) {
 
 
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                                       std::uint32_t rank) {
+                                       std::uint32_t rank, HelperBudget* helpers) {
   const std::size_t n = points.size();
   // Each vertex's distinct Delaunay neighbours, found through its
   // tetrahedra with a stamp per vertex (no global sort of the edges), and
@@ -683,22 +695,24 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
   const VertexTets by_vertex = vertex_tets(dt, n);
   const std::vector<std::uint32_t>& start = by_vertex.start;
   const std::vector<std::uint32_t>& incident = by_vertex.incident;
-  std::vector<std::uint32_t> stamp(n, ~0u);
-  std::vector<std::uint64_t> len;
   std::vector<std::uint64_t> scale(n, 0);
-  for (std::uint32_t v = 0; v < n; ++v) {
-    len.clear();
-    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
-      for (auto w : dt.tets[incident[i]])
-        if (w != v && stamp[w] != v) {
-          stamp[w] = v;
-          len.push_back(dist2(points[v], points[w]));
-        }
-    if (len.empty()) continue;
-    const auto k = std::min<std::size_t>(rank, len.size()) - 1;
-    std::nth_element(len.begin(), len.begin() + static_cast<long>(k), len.end());
-    scale[v] = len[k];
-  }
+  split_range(helpers, n, kSplitElements, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::uint32_t> stamp(n, ~0u);  // each range its own
+    std::vector<std::uint64_t> len;
+    for (auto v = static_cast<std::uint32_t>(begin); v < end; ++v) {
+      len.clear();
+      for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
+        for (auto w : dt.tets[incident[i]])
+          if (w != v && stamp[w] != v) {
+            stamp[w] = v;
+            len.push_back(dist2(points[v], points[w]));
+          }
+      if (len.empty()) continue;
+      const auto k = std::min<std::size_t>(rank, len.size()) - 1;
+      std::nth_element(len.begin(), len.begin() + static_cast<long>(k), len.end());
+      scale[v] = len[k];
+    }
+  });
   return scale;
 }
 
@@ -732,28 +746,31 @@ int compare_circumradius(const std::vector<GridPoint>& pts, const std::array<std
 }
 
 std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                                          const std::vector<std::uint64_t>& scale, const ReconParams& p) {
+                                          const std::vector<std::uint64_t>& scale, const ReconParams& p,
+                                          HelperBudget* helpers) {
   const std::size_t nt = dt.tets.size();
   const auto lim = limits(scale, p);
   std::vector<std::uint8_t> cand(nt * 4);
-  for (std::size_t t = 0; t < nt; ++t) {
-    const unsigned faces = candidate_faces(points, lim, dt.tets[t]);
-    for (int k = 0; k < 4; ++k) cand[t * 4 + static_cast<std::size_t>(k)] = (faces >> k) & 1u;
-  }
+  split_range(helpers, nt, kSplitElements, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) {
+      const unsigned faces = candidate_faces(points, lim, dt.tets[t]);
+      for (int k = 0; k < 4; ++k) cand[t * 4 + static_cast<std::size_t>(k)] = (faces >> k) & 1u;
+    }
+  });
   bool any_filter = false;
   for (auto f : p.filters) any_filter |= f != 0;
-  if (any_filter) apply_filters(points, dt, scale, p, cand);
+  if (any_filter) apply_filters(points, dt, scale, p, cand, helpers);
   return cand;
 }
 
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                      std::vector<std::uint8_t>* cand_out) {
+                                      std::vector<std::uint8_t>* cand_out, HelperBudget* helpers) {
   const std::size_t nt = dt.tets.size();
   std::vector<std::uint8_t> inside(nt, 1);
   std::vector<std::uint8_t> own;
   std::vector<std::uint8_t>& cand = cand_out ? *cand_out : own;
-  cand = candidate_flags(points, dt, scale, p);
+  cand = candidate_flags(points, dt, scale, p, helpers);
 
   // Flood from outside the hull through non-candidate faces.
   std::vector<std::uint32_t> stack;
@@ -1058,12 +1075,12 @@ void resolve_border(ReconParams& p, const std::vector<std::uint32_t>& inherited)
 }
 
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
-                           const ReconParams& p) {
+                           const ReconParams& p, HelperBudget* helpers) {
   if (kind == Kind::points) return {};
   if (p.border_delta) fail(Status::internal_error, "reconstruct: the border list is not resolved");
-  const auto scale = local_scale(points, dt, p.scale_rank);
+  const auto scale = local_scale(points, dt, p.scale_rank, helpers);
   std::vector<std::uint8_t> cand;
-  auto inside = rule_labels(points, dt, scale, p, &cand);
+  auto inside = rule_labels(points, dt, scale, p, &cand, helpers);
   if (p.repair) repair_labels(dt, kind, inside);
   return reconstruct_from_labels(dt, kind, p, std::move(inside), &cand);
 }

@@ -12,6 +12,7 @@
 
 #include "delaunay/delaunay.hpp"
 #include "hmc/codec.hpp"
+#include "util/helpers.hpp"
 
 namespace hmc::detail {
 
@@ -84,21 +85,24 @@ struct Reconstruction {
 };
 
 /// The local scale s_v of every vertex (squared grid units).
+/// `helpers`, here and below: where one is free, it takes half of the
+/// independent per-element work (the same result).
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                                       std::uint32_t rank);
+                                       std::uint32_t rank, HelperBudget* helpers = nullptr);
 
 /// Candidate flag of every face slot, indexed 4·tetrahedron + local face:
 /// the edge test against the alpha limits (spec 11.2) and the filters
 /// (11.2a). Both slots of a face carry the same flag.
 std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                                          const std::vector<std::uint64_t>& scale, const ReconParams& p);
+                                          const std::vector<std::uint64_t>& scale, const ReconParams& p,
+                                          HelperBudget* helpers = nullptr);
 
 /// The labels of the rule before toggles (flood from the hull through
 /// non-candidate faces, then peeling); `cand`, when given, receives the
 /// candidate flags (candidate_flags()).
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                      std::vector<std::uint8_t>* cand = nullptr);
+                                      std::vector<std::uint8_t>* cand = nullptr, HelperBudget* helpers = nullptr);
 
 /// The normative repair step (spec 11.4a) on rule labels: greedy local
 /// flips around unsound vertices (surface kind: points off the surface;
@@ -202,7 +206,7 @@ void resolve_border(ReconParams& p, const std::vector<std::uint32_t>& inherited)
 
 /// The whole normative rule (on a resolved border).
 Reconstruction reconstruct(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind,
-                           const ReconParams& p);
+                           const ReconParams& p, HelperBudget* helpers = nullptr);
 
 /// The end of reconstruct(): toggles (11.5), drops and extraction (11.6),
 /// on the labels of the rule after peeling and, when p.repair, the repair

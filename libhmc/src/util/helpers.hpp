@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstddef>
 #include <future>
 #include <system_error>
 #include <utility>
@@ -49,5 +50,26 @@ class HelperBudget {
  private:
   std::atomic<int> free_;
 };
+
+/// Calls f(begin, end) on the ranges [0, n / 2) here and [n / 2, n) on a
+/// helper, when `helpers` has one free and n is at least `min_n`; else
+/// f(0, n) here. The two calls must touch disjoint outputs. Rethrows an
+/// exception of either, the first range's first, once both are done.
+template <class F>
+void split_range(HelperBudget* helpers, std::size_t n, std::size_t min_n, F&& f) {
+  std::future<void> other;
+  if (helpers && n >= min_n) other = helpers->try_run([&f, n] { f(n / 2, n); });
+  if (!other.valid()) {
+    f(std::size_t{0}, n);
+    return;
+  }
+  try {
+    f(std::size_t{0}, n / 2);
+  } catch (...) {
+    other.wait();
+    throw;
+  }
+  other.get();
+}
 
 }  // namespace hmc::detail
