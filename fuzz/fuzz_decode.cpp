@@ -17,8 +17,9 @@
 // does, with the same header, quantizer and truncation, and decode fails
 // whenever inspect does); with reconstruction, rebuilding only the finest
 // level gives it the same elements, and decoding on two threads (each
-// level's reconstruction beside the next level's decoding) gives the same
-// result or the same error.
+// level's reconstruction beside the next level's decoding; with the finest
+// level alone rebuilt, the coarser levels tetrahedralized ahead) gives the
+// same result or the same error.
 #include <cstring>
 #include <vector>
 
@@ -198,6 +199,20 @@ void check_stream(const std::uint8_t* data, std::size_t size) {
       FUZZ_CHECK(g.levels[k].triangles == (last ? f.levels[k].triangles : std::vector<hmc::Triangle>{}) &&
                      g.levels[k].tetrahedra == (last ? f.levels[k].tetrahedra : std::vector<hmc::Tetrahedron>{}),
                  "level %zu: other elements when only the finest level is rebuilt", k);
+    }
+    // The same on two threads (the coarser levels tetrahedralized ahead,
+    // speculatively, the finest one's refined from them): what one thread
+    // decodes, two decode the same.
+    hmc::DecodeOptions two = options;
+    two.threads = 2;
+    const auto fin2 = hmc::decode(data, size, two);
+    FUZZ_CHECK(fin2.ok(), "the finest level alone on two threads fails: %s", fin2.error().to_string().c_str());
+    FUZZ_CHECK(fin2.value().levels.size() == g.levels.size(), "the finest level alone on two threads: other levels");
+    for (std::size_t k = 0; k < g.levels.size(); ++k) {
+      const hmc::DecodedLevel &x = fin2.value().levels[k], &y = g.levels[k];
+      FUZZ_CHECK(x.points == y.points && x.triangles == y.triangles && x.tetrahedra == y.tetrahedra &&
+                     x.rebuilt == y.rebuilt,
+                 "the finest level alone on two threads: level %zu differs", k);
     }
   }
 }
