@@ -533,6 +533,25 @@ TEST_CASE("malformed refinement streams are rejected, never misread") {
   }
 }
 
+TEST_CASE("base layer on two threads: the same stream and the same points") {
+  // With a helper free, the encoder ranks half of each depth of 4,096 nodes
+  // or more on it, and the decoder searches the nearest nodes of each depth
+  // of 2,048 or more there, ahead of its decoding (pointset/octree.cpp).
+  // A 9,600-point sphere has such depths.
+  Points sphere = quantize(samples::uv_sphere(80, 120), 12);
+  sort_canonical(sphere);
+  sphere.erase(std::unique(sphere.begin(), sphere.end()), sphere.end());
+  REQUIRE(sphere.size() > 8192);
+  HelperBudget two(2);
+  for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{5}}) {
+    CAPTURE(int(coder));
+    const auto one = encode_base(sphere, 12, coder);
+    REQUIRE(one[0] != 0);  // ranked
+    CHECK(encode_base(sphere, 12, coder, &two) == one);
+    CHECK(decode_base(one.data(), one.size(), 12, sphere.size(), TableForm::deltas, &two) == sphere);
+  }
+}
+
 TEST_CASE("base layer: the ranked octree (coders 2-5) codes surfaces smaller and decodes every set exactly") {
   // A sampled surface: the plane through the neighbouring node centres
   // predicts the children, so the ranked coder is chosen and is smaller.

@@ -551,7 +551,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     ByteWriter layer;
     std::optional<RefinementLayer> coded = jobs.take(i);
     if (i + 1 == plans.size()) {
-      layer.bytes(coded ? coded->bytes : encode_base(plan.points, q, base_coder));
+      layer.bytes(coded ? coded->bytes : encode_base(plan.points, q, base_coder, &helpers));
       w.chunk(kBaseLayer, layer.data());
       level.new_points = plan.points.size();
     } else if (!lossy_payloads.empty()) {

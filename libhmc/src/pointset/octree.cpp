@@ -362,6 +362,9 @@ class DepthNodes {
   mutable Search search_;
 };
 
+// Depths with fewer nodes are encoded on one thread (encode_ranked).
+constexpr std::size_t kSplitNodes = 4096;
+
 // The nearest nodes of a ranked depth's nodes, searched ahead on a helper
 // thread while this one decodes (decode_nodes). A node's nearest nodes depend
 // on the depth's node set alone; only the rest of its ranking (the causal
@@ -627,7 +630,7 @@ std::pair<std::size_t, std::size_t> cheapest_choice(const std::vector<std::uint8
 // for 4, coder 4 where it is smaller; for 5, coder 5 where the far ranking
 // makes it smaller still. `coder` is set to the one written.
 std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
-                                        int q, bool& any_ranked, std::uint8_t& coder) {
+                                        int q, bool& any_ranked, std::uint8_t& coder, HelperBudget* helpers) {
   const auto sq = static_cast<std::size_t>(q);
   const bool causal = coder >= kCausalCoder, pairing = coder >= kPairedCoder, far = coder >= kFarCoder;
   const std::size_t counts = causal ? kBaseNeighbours.size() : 1;
@@ -648,17 +651,23 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
       all[n].resize(occ.size() * kChoices);
       by_count[n].context[sd].resize(occ.size());
     }
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-      DepthNodes::Near near{};
-      const int found = depth.nearest(i, kBaseNeighbours[counts - 1], near);
-      for (std::size_t n = 0; n < counts; ++n) {
-        int c = 0;
-        const int k = std::min(found, kBaseNeighbours[n]);
-        const auto s = depth.symbols(nodes[i], i, occ[i], near, k, causal ? occ.data() : nullptr, c);
-        by_count[n].context[sd][i] = static_cast<std::uint8_t>(c);
-        std::copy(s.begin(), s.end(), all[n].begin() + static_cast<std::ptrdiff_t>(i * kChoices));
+    // The encoder knows every occupancy, so the nodes are independent: a
+    // helper, where one is free, takes the second half (its own searches).
+    split_range(helpers, nodes.size(), kSplitNodes, [&](std::size_t begin, std::size_t end) {
+      DepthNodes::Search search;
+      depth.start_search(search);
+      for (std::size_t i = begin; i < end; ++i) {
+        DepthNodes::Near near{};
+        const int found = depth.nearest(i, kBaseNeighbours[counts - 1], near.data(), search);
+        for (std::size_t n = 0; n < counts; ++n) {
+          int c = 0;
+          const int k = std::min(found, kBaseNeighbours[n]);
+          const auto s = depth.symbols(nodes[i], i, occ[i], near, k, causal ? occ.data() : nullptr, c);
+          by_count[n].context[sd][i] = static_cast<std::uint8_t>(c);
+          std::copy(s.begin(), s.end(), all[n].begin() + static_cast<std::ptrdiff_t>(i * kChoices));
+        }
       }
-    }
+    });
     for (std::size_t n = 0; n < counts; ++n) {
       RankedDepths& r = by_count[n];
       const auto& ctx = r.context[sd];
@@ -813,7 +822,8 @@ std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size,
 
 }  // namespace
 
-std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder) {
+std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder,
+                                      HelperBudget* helpers) {
   if (ranked_coder != kPlainCoder && ranked_coder != kGapCoder && ranked_coder != kCausalCoder &&
       ranked_coder != kPairedCoder && ranked_coder != kFarCoder)
     fail(Status::invalid_argument, "BASE: the encoder writes coders 0, 2, 3, 4 and 5 only");
@@ -826,7 +836,7 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
   }
   bool any_ranked = false;
   std::uint8_t coder = ranked_coder;
-  auto ranked = encode_ranked(levels, keys, q, any_ranked, coder);
+  auto ranked = encode_ranked(levels, keys, q, any_ranked, coder, helpers);
   std::vector<std::uint8_t> out;
   // A ranked coder only when it saves 1% of the layer: its searches cost
   // decoding time (measured with coder 1: on a million random points in a

@@ -40,7 +40,10 @@ std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size,
 /// `ranked_coder`: 5 (coder 3, 4 or 5), or 4, 3 or 2 to compare with
 /// (tests), or 0 for coder 0 alone (decoding speed); coder 1 is never
 /// written (coder 2 with every weight 0 ranks as it does).
-std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder = 5);
+/// `helpers`: where one is free, it ranks half of each large depth's nodes
+/// (the same stream).
+std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder = 5,
+                                      HelperBudget* helpers = nullptr);
 
 /// Decode a BASE payload (coder byte first) of exactly `n` points, in
 /// canonical order; bad_layer for an unknown coder.
