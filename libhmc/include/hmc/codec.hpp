@@ -136,9 +136,13 @@ struct EncodeOptions {
   /// point layers, coded as soon as their levels are known, beside the
   /// planning of the coarser levels; half of the winding numbers that tell
   /// which tetrahedra lie inside the input; half of each batch of
-  /// reconstruction trials that do not depend on each other. The stream is
-  /// the same, byte for byte. On five of the shared models with two
-  /// threads: 22-28 % less wall-clock time at four levels, 30-39 % at one.
+  /// reconstruction trials that do not depend on each other; half of the
+  /// nodes of a large base layer that no helper was free to code
+  /// beforehand. The stream is the same, byte for byte. On five of the
+  /// shared models with two threads: 22-28 % less wall-clock time at four
+  /// levels, 30-39 % at one (measured before the base layer's split, which
+  /// takes 5-11 % more off four-level encodes of the bunny, the horse and
+  /// hand_tetgen).
   unsigned threads = 1;
 };
 
