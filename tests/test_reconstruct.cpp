@@ -1299,7 +1299,8 @@ TEST_CASE("on two threads, the tetrahedralization's verification and the rule's 
       p.scale_rank = rank;
       p.multipliers = {1024};
       for (int f = 0; f < kFilterCount; ++f)
-        if (mask >> f & 1) p.filters[static_cast<std::size_t>(f)] = f == kLone ? 1 : strong[static_cast<std::size_t>(f)];
+        if (mask >> f & 1)
+          p.filters[static_cast<std::size_t>(f)] = f == kLone ? 1 : strong[static_cast<std::size_t>(f)];
       const auto flags = candidate_flags(pts, dt, scale, p);
       CHECK(candidate_flags(pts, dt, scale, p, &two) == flags);
       std::vector<std::uint8_t> cand;

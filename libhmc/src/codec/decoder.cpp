@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <exception>
 #include <future>
@@ -220,7 +219,7 @@ struct ChunkDecoder::State {
   // (a limit, memory) is dropped and the level is tetrahedralized from
   // scratch, as with one thread, so the output and the errors are those of
   // a sequential decode. At most one in flight, its bytes counted in
-  // `memory` (an estimate until joined).
+  // `memory` (at its bound until joined).
   struct Ahead {
     int lod;  // the level whose points it tetrahedralizes
     std::shared_ptr<const std::vector<GridPoint>> points;
@@ -351,12 +350,14 @@ void ChunkDecoder::State::speculate(const DecodedLevel& level) {
     if (ahead->dt.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
     from = take_ahead();
   }
-  // Its estimate: about 6.5 tetrahedra per point, each with its neighbours.
+  // At most 8 tetrahedra per point (points on a surface or in a volume
+  // have about 6.5; with more, as on skew lines, it gives up), counted at
+  // that bound, so that the memory limit holds whatever the points.
   const std::uint64_t n = level.points.size();
-  const std::uint64_t bytes = n * 7 * 2 * sizeof(std::array<std::uint32_t, 4>);
+  const std::uint64_t max_tets = 8 * n;
+  const std::uint64_t bytes = max_tets * kTetBytes;
   const std::uint64_t max = options.limits.max_memory;
   if (memory > max || bytes > max - memory) return;
-  const std::uint64_t max_tets = (max - memory - bytes) / kTetBytes;
   auto points = std::make_shared<const std::vector<GridPoint>>(level.points);
   auto job = [points, from = std::move(from), max_tets]() mutable -> std::optional<Tetrahedralization> {
     try {

@@ -139,7 +139,8 @@ std::string check(const std::vector<GridPoint>& pts, const TetList& tets, const 
     }
   };
   Part first, second;
-  split_range(helpers, nt, 16384, [&](std::size_t begin, std::size_t end) { faces(begin, end, begin == 0 ? first : second); });
+  split_range(helpers, nt, 16384,
+              [&](std::size_t begin, std::size_t end) { faces(begin, end, begin == 0 ? first : second); });
   if (!first.error.empty()) return first.error;
   if (!second.error.empty()) return second.error;
   if (first.links + second.links != 2 * (first.pairs + second.pairs)) return "asymmetric adjacency";

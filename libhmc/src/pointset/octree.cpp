@@ -402,7 +402,8 @@ class SearchAhead {
     at_.store(i, std::memory_order_release);  // nodes before i are done with: their slots are free
     std::size_t next = next_.load(std::memory_order_acquire);
     while (next <= i)
-      if (next_.compare_exchange_weak(next, i + 1, std::memory_order_acq_rel)) return depth_.nearest(i, neighbours_, near);
+      if (next_.compare_exchange_weak(next, i + 1, std::memory_order_acq_rel))
+        return depth_.nearest(i, neighbours_, near);
     // The helper has claimed node i: its result is there or about to be.
     const std::size_t slot = i % kLead;
     while (stamp_[slot].load(std::memory_order_acquire) != i + 1) {
@@ -426,7 +427,8 @@ class SearchAhead {
       if (!next_.compare_exchange_weak(j, j + 1, std::memory_order_acq_rel)) continue;
       const std::size_t slot = j % kLead;
       try {
-        found_[slot] = static_cast<std::int8_t>(depth_.nearest(j, neighbours_, near_.data() + slot * kMaxNeighbours, search_));
+        std::uint32_t* near = near_.data() + slot * kMaxNeighbours;
+        found_[slot] = static_cast<std::int8_t>(depth_.nearest(j, neighbours_, near, search_));
       } catch (...) {  // out of memory for its k-d tree: the other thread searches for itself
         failed_.store(true, std::memory_order_release);
         return;
