@@ -8,10 +8,10 @@
 #include <cmath>
 #include <future>
 #include <memory>
-#include <thread>
 #include <numeric>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "entropy/huffman.hpp"
 #include "entropy/paired.hpp"

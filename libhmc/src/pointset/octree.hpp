@@ -49,7 +49,7 @@ std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int 
 /// canonical order; bad_layer for an unknown coder.
 /// `form`: the stream's code-length table syntax (HEAD flag bit 0).
 /// `helpers`: where one is free, the ranked coders' nearest-node searches
-/// run a chunk of nodes ahead on it (same result).
+/// run on it, ahead of the decoding (same result).
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n,
                                    TableForm form = TableForm::deltas, HelperBudget* helpers = nullptr);
 
