@@ -174,6 +174,33 @@ static void test_encode_options(void) {
   hmc_encoder_destroy(e);
 }
 
+/* Notes of the last successful encode: four points make one level of the
+ * two asked for; a failing encode clears them. */
+static void test_encoder_notes(void) {
+  hmc_encoder *e = hmc_encoder_create(NULL);
+  hmc_encode_options o;
+  double xyz[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  uint8_t *out = NULL;
+  size_t size = 0;
+  CHECK(strcmp(hmc_encoder_notes(NULL), "") == 0);
+  CHECK(strcmp(hmc_encoder_notes(e), "") == 0);
+  hmc_encode_options_init(&o);
+  o.levels = 2;
+  CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_OK);
+  CHECK_STATUS(hmc_encoder_encode(e, xyz, 4, NULL, 0, NULL, 0, &out, &size), HMC_OK);
+  CHECK(strstr(hmc_encoder_notes(e), "1 of the 2 levels requested") != NULL);
+  CHECK(strstr(hmc_encoder_notes(e), "it has 4 points\n") != NULL);
+  hmc_free(NULL, out);
+  CHECK_STATUS(hmc_encoder_encode(e, xyz, 0, NULL, 0, NULL, 0, &out, &size), HMC_INVALID_ARGUMENT);
+  CHECK(strcmp(hmc_encoder_notes(e), "") == 0);
+  o.levels = 1;
+  CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_OK);
+  CHECK_STATUS(hmc_encoder_encode(e, xyz, 4, NULL, 0, NULL, 0, &out, &size), HMC_OK);
+  CHECK(strcmp(hmc_encoder_notes(e), "") == 0);
+  hmc_free(NULL, out);
+  hmc_encoder_destroy(e);
+}
+
 /* fast_decode: a larger stream with the same points. */
 static void test_fast_decode(void) {
   size_t size = 0, fast_size = 0, count = 0, fast_count = 0;
@@ -667,6 +694,7 @@ int main(void) {
   test_strings();
   test_handles();
   test_encode_options();
+  test_encoder_notes();
   test_round_trip();
   test_fast_decode();
   test_volume();

@@ -73,6 +73,25 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   CHECK(r.out.find("\"coder\": 0, \"coder_name\": \"octree\"") != std::string::npos);
 }
 
+TEST_CASE("enc notes a flat surface's missing connectivity and fewer levels than asked, in text and JSON") {
+  const auto dir = testgen::temp_dir("cli_notes");
+  REQUIRE(io::write_mesh(dir + "/flat.ply", samples::height_field(10, 0.0)).ok());
+  auto r = hmc_run(dir, "enc " + q(dir + "/flat.ply") + " -o " + q(dir + "/f.hmc") + " --levels 2");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(r.out.find("note: the 100 points span no volume") != std::string::npos);
+  CHECK(r.out.find("note: 1 of the 2 levels requested") != std::string::npos);
+  r = hmc_run(dir, "enc " + q(dir + "/flat.ply") + " -o " + q(dir + "/f.hmc") + " --levels 2 --json");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(r.out.find("\"notes\": [\"the 100 points span no volume") != std::string::npos);
+  // Nothing to note: an empty list, and no note line.
+  REQUIRE(io::write_mesh(dir + "/torus.ply", samples::torus(30, 16)).ok());
+  r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/t.hmc") + " --json");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(r.out.find("\"notes\": []") != std::string::npos);
+  r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/t.hmc"));
+  CHECK(r.out.find("note:") == std::string::npos);
+}
+
 TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each, with the same finest mesh") {
   const auto dir = testgen::temp_dir("cli_rebuild");
   REQUIRE(io::write_mesh(dir + "/torus.ply", samples::torus(40, 16)).ok());

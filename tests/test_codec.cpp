@@ -169,6 +169,61 @@ TEST_CASE("kind is detected from the connectivity and can be overridden") {
   CHECK(decode_ok(e.bytes).kind == Kind::volume);
 }
 
+TEST_CASE("the report notes fewer levels than requested and points that span no volume") {
+  auto notes_of = [](const Mesh& m, int levels, std::optional<Kind> kind = std::nullopt) {
+    EncodeOptions o;
+    o.levels = levels;
+    o.kind = kind;
+    const auto e = encode(m, o);
+    REQUIRE(e.ok());
+    return std::make_pair(e.value().report.notes, e.value().report.levels.size());
+  };
+  auto has = [](const std::string& s, const char* part) { return s.find(part) != std::string::npos; };
+
+  // A flat surface: its triangles are not rebuilt, nor can it be decimated.
+  const Mesh flat = samples::height_field(12, 0.0);
+  REQUIRE(!flat.triangles.empty());
+  for (Kind k : {Kind::surface, Kind::volume}) {
+    const auto [notes, levels] = notes_of(flat, 3, k);
+    CHECK(levels == 1);
+    REQUIRE(notes.size() == 2);
+    CHECK(has(notes[0], "span no volume"));
+    CHECK(has(notes[0], k == Kind::surface ? "no triangles" : "no tetrahedra"));
+    CHECK(has(notes[1], "1 of the 3 levels requested"));
+  }
+  // One level asked for: only the connectivity note.
+  CHECK(notes_of(flat, 1).first.size() == 1);
+  // Points carry no connectivity to rebuild; the levels note stays.
+  {
+    const auto [notes, levels] = notes_of(flat, 3, Kind::points);
+    REQUIRE(notes.size() == 1);
+    CHECK(has(notes[0], "1 of the 3 levels requested"));
+  }
+
+  // A small torus runs out of removable points before 64 levels; the note
+  // names the count written.
+  {
+    const auto [notes, levels] = notes_of(samples::torus(12, 8), 64);
+    CHECK(levels < 64);
+    REQUIRE(notes.size() == 1);
+    CHECK(has(notes[0], (std::to_string(levels) + " of the 64 levels requested").c_str()));
+    CHECK(has(notes[0], ("level " + std::to_string(levels - 1) + " is the coarsest").c_str()));
+  }
+  // Four points cannot be thinned further.
+  {
+    Mesh four;
+    four.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const auto [notes, levels] = notes_of(four, 2);
+    CHECK(levels == 1);
+    REQUIRE(notes.size() == 1);
+    CHECK(has(notes[0], "it has 4 points"));
+  }
+  // Nothing to say when the request is met by a solid surface.
+  const auto [notes, levels] = notes_of(samples::torus(40, 20), 3);
+  CHECK(levels == 3);
+  CHECK(notes.empty());
+}
+
 TEST_CASE("bad encoder input is refused with invalid_argument") {
   CHECK(encode(Mesh{}).status() == Status::invalid_argument);
   Mesh m = samples::random_ball(10, 1);

@@ -172,6 +172,9 @@ int cmd_enc(int argc, char** argv) {
     j.key("codebook_size").value(r.codebook_size);
     j.key("triangles").value(static_cast<std::uint64_t>(e.triangles.size()));
     j.key("tetrahedra").value(static_cast<std::uint64_t>(e.tetrahedra.size()));
+    j.key("notes").begin_array();
+    for (const auto& n : r.notes) j.value(n);
+    j.end_array();
     j.end_object();
     std::fputs(j.str().c_str(), stdout);
   } else {
@@ -196,6 +199,7 @@ int cmd_enc(int argc, char** argv) {
       std::printf("rebuilt by the decoder: %zu triangles, %zu tetrahedra\n", e.triangles.size(), e.tetrahedra.size());
     std::printf("%s: %llu bytes, %.3f bits per point (read %.3f s, encode %.3f s)\n", out.empty() ? "(no output)" : out.c_str(),
                 static_cast<unsigned long long>(r.total_bytes), bpp, read_s, enc_s);
+    for (const auto& n : r.notes) std::printf("note: %s\n", n.c_str());
   }
   return kOk;
 }

@@ -192,6 +192,11 @@ struct EncodeReport {
   std::vector<LevelReport> levels;      ///< coarsest first
   /// Entries of the vector quantizer's codebook (VQTB); 0 when none is sent.
   std::uint64_t codebook_size = 0;
+  /// What the caller may not expect of the stream, one sentence each: fewer
+  /// levels than requested (and why), or a surface or volume whose points
+  /// span no volume, for which the decoder rebuilds no connectivity. Empty
+  /// when there is nothing to say.
+  std::vector<std::string> notes;
 };
 
 /// One decoded level.

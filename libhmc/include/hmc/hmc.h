@@ -269,6 +269,15 @@ HMC_API hmc_status hmc_encoder_encode(hmc_encoder *encoder, const double *xyz, s
  *          until the encoder's next call (never NULL) */
 HMC_API const char *hmc_encoder_message(const hmc_encoder *encoder);
 
+/** What the encoder's last successful hmc_encoder_encode() noted about the
+ *  stream (see `hmc::EncodeReport::notes`): fewer levels than requested and
+ *  why, or points that span no volume, for which the decoder rebuilds no
+ *  connectivity. One sentence per line, each ending in a newline.
+ *  @param encoder the encoder (NULL gives "")
+ *  @return the notes, "" if none or if the last encode failed; they belong
+ *          to the encoder and are valid until its next call (never NULL) */
+HMC_API const char *hmc_encoder_notes(const hmc_encoder *encoder);
+
 /** @} */
 
 /* ------------------------------------------------------------------------ */

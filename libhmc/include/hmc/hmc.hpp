@@ -171,6 +171,8 @@ class Encoder {
   hmc_encoder* get() const noexcept { return h_.get(); }
   /// hmc_encoder_message().
   std::string message() const { return hmc_encoder_message(h_.get()); }
+  /// hmc_encoder_notes().
+  std::string notes() const { return hmc_encoder_notes(h_.get()); }
 
  private:
   Encoder(EncoderHandle h, const hmc_allocator* a) : h_(std::move(h)), alloc_(a ? *a : hmc_allocator{}), custom_(a != nullptr) {}

@@ -118,6 +118,7 @@ struct hmc_encoder {
   hmc_allocator alloc;
   hmc::EncodeOptions options;
   std::string message;
+  std::string notes;  // of the last successful encode, a line each
 };
 
 struct hmc_decoder {
@@ -242,6 +243,7 @@ hmc_status hmc_encoder_encode(hmc_encoder* encoder, const double* xyz, size_t po
   if (out_bytes) *out_bytes = nullptr;
   if (out_size) *out_size = 0;
   if (!encoder) return HMC_INVALID_ARGUMENT;
+  encoder->notes.clear();
   return guard(encoder->message, [&]() -> hmc_status {
     auto bad = [&](const char* m) {
       encoder->message = m;
@@ -267,12 +269,16 @@ hmc_status hmc_encoder_encode(hmc_encoder* encoder, const double* xyz, size_t po
     }
     const auto& bytes = r.value().bytes;
     const hmc_status s = hand_out(encoder->alloc, bytes.data(), bytes.size(), out_bytes, encoder->message);
-    if (s == HMC_OK) *out_size = bytes.size();
+    if (s == HMC_OK) {
+      *out_size = bytes.size();
+      for (const auto& n : r.value().report.notes) encoder->notes += n + "\n";
+    }
     return s;
   });
 }
 
 const char* hmc_encoder_message(const hmc_encoder* encoder) { return encoder ? encoder->message.c_str() : ""; }
+const char* hmc_encoder_notes(const hmc_encoder* encoder) { return encoder ? encoder->notes.c_str() : ""; }
 
 // ---------------------------------------------------------------- decoder
 

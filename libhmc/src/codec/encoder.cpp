@@ -472,6 +472,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   winding.helpers = &helpers;
   LayerJobs jobs(options.vq_bits == 0, helpers);  // lossy layers are planned apart
   const std::uint8_t base_coder = options.fast_decode ? 0 : 5;
+  std::string stopped;  // why a level before the last requested one is the coarsest
   for (int k = 0; k < options.levels; ++k) {
     progress(k, 0);
     LevelPlan plan;
@@ -521,12 +522,28 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
         });
     }
     plan.report.simplices = rep.kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
+    if (k + 1 < options.levels && current.empty())
+      stopped = !more                       ? "it has " + std::to_string(plan.points.size()) + " points"
+                : !plan.added.empty()        ? std::string("the decimation would remove all its points")
+                : dt.tets.empty()            ? std::string("its points span no volume")
+                : plan.report.simplices == 0 && rep.kind != Kind::points
+                    ? std::string("its reconstruction has no ") + (rep.kind == Kind::surface ? "triangles" : "tetrahedra")
+                    : std::string("the decimation found no point to remove");
+    if (k == 0 && rep.kind != Kind::points && dt.tets.empty())
+      rep.notes.push_back("the " + std::to_string(plan.points.size()) +
+                          " points span no volume (all coplanar or collinear on the grid): the decoder rebuilds "
+                          "connectivity from their 3D Delaunay tetrahedralization, so it rebuilds no " +
+                          (rep.kind == Kind::surface ? "triangles" : "tetrahedra"));
     if (k == 0) plan.dt = std::move(dt);
     plans.push_back(std::move(plan));
     work_done += std::pow(1.0 - 0.5 * options.removal_ratio, k);
     if (current.empty()) break;
   }
   progress(static_cast<int>(plans.size()) - 1, 1);
+  if (!stopped.empty())
+    rep.notes.push_back(std::to_string(plans.size()) + " of the " + std::to_string(options.levels) +
+                        " levels requested: level " + std::to_string(plans.size() - 1) +
+                        " is the coarsest, as " + stopped);
   // The coarsest level adds nothing to a coarser one.
   plans.back().added.clear();
   std::vector<std::vector<std::uint8_t>> lossy_payloads;  // REFN payloads of plan_lossy, by plan

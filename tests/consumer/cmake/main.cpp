@@ -56,6 +56,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "consumer_cxx: %s\n", again.error().to_string().c_str());
     return 5;
   }
+  // One level of a solid surface: nothing to note.
+  if (!enc.value().notes().empty()) {
+    std::fprintf(stderr, "consumer_cxx: unexpected encoder notes: %s\n", enc.value().notes().c_str());
+    return 8;
+  }
   auto check = hmc::capi::Decoder::create();
   if (!check || !check.value().decode(again.value().data(), again.value().size())) return 6;
   const auto finest = check.value().level_info(0).value();
