@@ -523,7 +523,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     }
     plan.report.simplices = rep.kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
     if (k + 1 < options.levels && current.empty())
-      stopped = !more                       ? "it has " + std::to_string(plan.points.size()) + " points"
+      stopped = !more                       ? "it has " + std::to_string(plan.points.size()) + (plan.points.size() == 1 ? " point" : " points")
                 : !plan.added.empty()        ? std::string("the decimation would remove all its points")
                 : dt.tets.empty()            ? std::string("its points span no volume")
                 : plan.report.simplices == 0 && rep.kind != Kind::points
