@@ -201,6 +201,54 @@ static void test_encoder_notes(void) {
   hmc_encoder_destroy(e);
 }
 
+/* Threads: the same stream and the same levels, triangles included; out of
+ * range or too late is refused. */
+static void test_threads(void) {
+  mesh m = make_torus(48, 20);
+  hmc_encoder *e = hmc_encoder_create(NULL);
+  hmc_decoder *one = hmc_decoder_create(NULL), *two = hmc_decoder_create(NULL);
+  hmc_encode_options o;
+  uint8_t *bytes = NULL;
+  size_t size = 0, ref_size = 0, k;
+  uint8_t *ref = encode_torus(48, 20, 3, &ref_size);
+  CHECK_STATUS(hmc_encoder_set_threads(NULL, 2), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_encoder_set_threads(e, 0), HMC_INVALID_ARGUMENT);
+  CHECK(strstr(hmc_encoder_message(e), "threads") != NULL);
+  CHECK_STATUS(hmc_encoder_set_threads(e, 65), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_encoder_set_threads(e, 2), HMC_OK);
+  hmc_encode_options_init(&o); /* as encode_torus(): the setting survives set_options */
+  o.levels = 3;
+  o.boundary_mode = HMC_BOUNDARY_LINEAR;
+  CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_OK);
+  CHECK_STATUS(hmc_encoder_encode(e, m.xyz, m.points, m.tris, m.triangles, NULL, 0, &bytes, &size), HMC_OK);
+  CHECK(size == ref_size && memcmp(bytes, ref, size) == 0);
+
+  CHECK_STATUS(hmc_decoder_set_threads(NULL, 2), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_decoder_set_threads(two, 0), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_decoder_set_threads(two, 65), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_decoder_set_threads(two, 2), HMC_OK);
+  CHECK_STATUS(hmc_decoder_decode(one, bytes, size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_decode(two, bytes, size), HMC_OK);
+  CHECK(hmc_decoder_level_count(one) == 3 && hmc_decoder_level_count(two) == 3);
+  for (k = 0; k < 3; ++k) {
+    uint32_t *t1 = NULL, *t2 = NULL;
+    size_t n1 = 0, n2 = 0;
+    CHECK_STATUS(hmc_decoder_level_triangles(one, k, &t1, &n1), HMC_OK);
+    CHECK_STATUS(hmc_decoder_level_triangles(two, k, &t2, &n2), HMC_OK);
+    CHECK(n1 > 0 && n1 == n2 && memcmp(t1, t2, 3 * n1 * sizeof(uint32_t)) == 0);
+    hmc_free(NULL, t1);
+    hmc_free(NULL, t2);
+  }
+  CHECK_STATUS(hmc_decoder_set_threads(two, 1), HMC_INVALID_ARGUMENT); /* decoding has begun */
+  hmc_free(NULL, bytes);
+  hmc_free(NULL, ref);
+  hmc_decoder_destroy(one);
+  hmc_decoder_destroy(two);
+  hmc_encoder_destroy(e);
+  free(m.xyz);
+  free(m.tris);
+}
+
 /* fast_decode: a larger stream with the same points. */
 static void test_fast_decode(void) {
   size_t size = 0, fast_size = 0, count = 0, fast_count = 0;
@@ -695,6 +743,7 @@ int main(void) {
   test_handles();
   test_encode_options();
   test_encoder_notes();
+  test_threads();
   test_round_trip();
   test_fast_decode();
   test_volume();

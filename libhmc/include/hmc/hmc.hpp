@@ -147,6 +147,8 @@ class Encoder {
   Result<Done> set_options(const hmc_encode_options& options) {
     return check(hmc_encoder_set_options(h_.get(), &options));
   }
+  /// Threads an encode may use, the caller's included (hmc_encoder_set_threads()).
+  Result<Done> set_threads(unsigned threads) { return check(hmc_encoder_set_threads(h_.get(), threads)); }
   /// The default settings.
   static hmc_encode_options defaults() noexcept {
     hmc_encode_options o;
@@ -218,6 +220,9 @@ class Decoder {
   Result<Done> set_rebuild_coarser_levels(bool all) {
     return check(hmc_decoder_set_rebuild_coarser_levels(h_.get(), all ? 1 : 0));
   }
+  /// Threads a whole-buffer decode may use, the caller's included
+  /// (hmc_decoder_set_threads()).
+  Result<Done> set_threads(unsigned threads) { return check(hmc_decoder_set_threads(h_.get(), threads)); }
 
   /// Decode a whole buffer (hmc_decoder_decode()).
   /// @param data the stream

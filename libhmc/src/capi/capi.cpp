@@ -205,6 +205,18 @@ hmc_encoder* hmc_encoder_create(const hmc_allocator* allocator) { return create_
 
 void hmc_encoder_destroy(hmc_encoder* encoder) { destroy_handle(encoder); }
 
+hmc_status hmc_encoder_set_threads(hmc_encoder* encoder, unsigned threads) {
+  if (!encoder) return HMC_INVALID_ARGUMENT;
+  return guard(encoder->message, [&]() -> hmc_status {
+    if (threads < 1 || threads > 64) {
+      encoder->message = "threads must be between 1 and 64, got " + std::to_string(threads);
+      return HMC_INVALID_ARGUMENT;
+    }
+    encoder->options.threads = threads;
+    return HMC_OK;
+  });
+}
+
 hmc_status hmc_encoder_set_options(hmc_encoder* encoder, const hmc_encode_options* o) {
   if (!encoder) return HMC_INVALID_ARGUMENT;
   return guard(encoder->message, [&]() -> hmc_status {
@@ -232,6 +244,7 @@ hmc_status hmc_encoder_set_options(hmc_encoder* encoder, const hmc_encode_option
     e.optimizer = static_cast<hmc::Optimizer>(o->optimizer);
     e.write_info = o->write_info != 0;
     e.fast_decode = o->fast_decode != 0;
+    e.threads = encoder->options.threads;  // set apart (hmc_encoder_set_threads)
     encoder->options = e;
     return HMC_OK;
   });
@@ -335,6 +348,16 @@ hmc_status hmc_decoder_set_reconstruct(hmc_decoder* decoder, int reconstruct) {
   return guard(decoder->message, [&]() -> hmc_status {
     if (decoder->begun()) return decoder->misuse("reconstruction must be chosen before decoding begins");
     decoder->options.reconstruct = reconstruct != 0;
+    return HMC_OK;
+  });
+}
+
+hmc_status hmc_decoder_set_threads(hmc_decoder* decoder, unsigned threads) {
+  if (!decoder) return HMC_INVALID_ARGUMENT;
+  return guard(decoder->message, [&]() -> hmc_status {
+    if (decoder->begun()) return decoder->misuse("threads must be set before decoding begins");
+    if (threads < 1 || threads > 64) return decoder->misuse("threads must be between 1 and 64, got " + std::to_string(threads));
+    decoder->options.threads = threads;
     return HMC_OK;
   });
 }
