@@ -540,17 +540,21 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     if (current.empty()) break;
   }
   progress(static_cast<int>(plans.size()) - 1, 1);
-  if (!stopped.empty())
-    rep.notes.push_back(std::to_string(plans.size()) + " of the " + std::to_string(options.levels) +
-                        " levels requested: level " + std::to_string(plans.size() - 1) +
-                        " is the coarsest, as " + stopped);
   // The coarsest level adds nothing to a coarser one.
   plans.back().added.clear();
   std::vector<std::vector<std::uint8_t>> lossy_payloads;  // REFN payloads of plan_lossy, by plan
   VectorQuantizer codebook;
+  const std::size_t planned = plans.size();
   if (options.vq_bits > 0 && plans.size() > 1)
     codebook = plan_lossy(plans, lossy_payloads, rep.kind, q, options, fine, fine_points, fine_gp);
   rep.codebook_size = codebook.codebook.size();
+  const std::string written = std::to_string(plans.size()) + " of the " + std::to_string(options.levels) +
+                              " levels requested";
+  if (!stopped.empty())
+    rep.notes.push_back(written + ": level " + std::to_string(plans.size() - 1) + " is the coarsest, as " + stopped);
+  if (plans.size() < planned)
+    rep.notes.push_back((stopped.empty() ? written + ": " : std::string()) + std::to_string(planned - plans.size()) +
+                        " planned level(s) left out, as their lossy layers placed none of their points");
 
   Header header;
   header.kind = rep.kind;
