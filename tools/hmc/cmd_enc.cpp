@@ -89,7 +89,7 @@ int cmd_enc(int argc, char** argv) {
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
   if (!a.ok() || a.positional().size() != 1 || (out.empty() && !a.has("--canonical"))) {
     std::fprintf(stderr,
-                 "hmc enc: %s\nusage: hmc enc IN -o OUT.hmc [--bits Q] [--kind K] [--levels N] [--ratio R] [--boundary M]\n"
+                 "hmc enc: %s\nusage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--boundary M]\n"
                  "                  [--optimizer O] [--fidelity F] [--vq-bits B [--vq-residual S]] [--fast-decode]\n"
                  "                  [--canonical DIR] [--no-info] [--threads N] [--json]   (hmc --help: what each does)\n",
                  a.ok() ? "need one input file and -o OUT.hmc" : a.error().c_str());
