@@ -1313,3 +1313,23 @@ TEST_CASE("on two threads, the tetrahedralization's verification and the rule's 
     }
   }
 }
+
+TEST_CASE("open surfaces: fidelity shape mends the non-manifold edges that exact keeps") {
+  // Height fields are open sheets whose input triangles are often not
+  // Delaunay faces: the winding numbers' labels (what exact reproduces)
+  // pinch into edges with four faces. Shape runs the repair's search on
+  // them, edge defects only.
+  struct Case {
+    double amplitude;
+    int bits;
+  };
+  for (const Case c : {Case{0.3, 8}, Case{0.3, 10}, Case{0.3, 12}, Case{0.1, 10}}) {
+    CAPTURE(c.amplitude);
+    CAPTURE(c.bits);
+    const Mesh m = samples::height_field(20, c.amplitude);
+    const auto shape = check_surface(roundtrip(m, Fidelity::shape, nullptr, c.bits).finest().triangles);
+    const auto exact = check_surface(roundtrip(m, Fidelity::exact, nullptr, c.bits).finest().triangles);
+    CHECK(exact.nonmanifold_edges > 0);
+    CHECK(shape.nonmanifold_edges < exact.nonmanifold_edges);
+  }
+}

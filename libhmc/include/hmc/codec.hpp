@@ -63,7 +63,9 @@ struct VectorQuantizer {
 enum class Fidelity : std::uint8_t {
   rule = 0,   ///< only the rule's parameters: the decoder's own best guess
   shape = 1,  ///< also correct every label that changes the shape; leave flips of
-              ///< flat tetrahedra (diagonals of near-planar quads) to the rule
+              ///< flat tetrahedra (diagonals of near-planar quads) to the rule, and
+              ///< mend where the input's own labels are unsound (edges with more
+              ///< than two faces where input triangles are not Delaunay faces)
   exact = 2,  ///< also correct those: the decoded labels equal the input's exactly
 };
 
