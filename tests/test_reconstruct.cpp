@@ -11,11 +11,13 @@
 #include <set>
 
 #include "codec/format.hpp"
+#include "codec/input_grid.hpp"
 #include "container/container.hpp"
 #include "entropy/bitio.hpp"
 #include "delaunay/delaunay.hpp"
 #include "delaunay/predicates.hpp"
 #include "hmc/codec.hpp"
+#include "quant/scalar_quantizer.hpp"
 #include "reconstruct/reconstruct.hpp"
 #include "reconstruct/tuning.hpp"
 #include "reconstruct/winding.hpp"
@@ -1331,5 +1333,45 @@ TEST_CASE("open surfaces: fidelity shape mends the non-manifold edges that exact
     const auto exact = check_surface(roundtrip(m, Fidelity::exact, nullptr, c.bits).finest().triangles);
     CHECK(exact.nonmanifold_edges > 0);
     CHECK(shape.nonmanifold_edges < exact.nonmanifold_edges);
+  }
+}
+
+TEST_CASE("the input's boundary faces the way the input's own tetrahedra say, whatever rounding does to them") {
+  // Each tetrahedron: positively oriented in the input's coordinates, flat
+  // (the first) or inverted (the second) once rounded to the grid (q = 3,
+  // extent 7: one unit per step).
+  const std::vector<std::array<Vec3, 4>> cases = {
+      {Vec3{0, 0, 0}, Vec3{7, 0, 0}, Vec3{0, 7, 0}, Vec3{3, 3, 0.3}},
+      {Vec3{0, 0, 0.4}, Vec3{7, 0, 0.4}, Vec3{0, 7, 0.4}, Vec3{3, 3, 0.6}},
+  };
+  auto orient = [](const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
+                 w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
+  };
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    CAPTURE(c);
+    Mesh m;
+    m.points.assign(cases[c].begin(), cases[c].end());
+    m.tetrahedra = {{0, 1, 2, 3}};
+    REQUIRE(orient(m.points[0], m.points[1], m.points[2], m.points[3]) > 0);
+    const auto sq = fit_quantizer(m.points, 3);
+    const auto quantized = quantize(m.points, sq);
+    std::vector<GridPoint> points = quantized;
+    std::sort(points.begin(), points.end());
+    REQUIRE(points.size() == 4);
+    // On the grid the tetrahedron is flat or inverted.
+    CHECK(orient3d(quantized[0], quantized[1], quantized[2], quantized[3]) <= 0);
+    const InputOnGrid g = input_on_grid(m, quantized, points);
+    REQUIRE(g.surface.size() == 4);
+    // Back to input indices: each face has the fourth vertex behind it.
+    std::vector<std::uint32_t> input_of(points.size());
+    for (std::uint32_t i = 0; i < 4; ++i)
+      input_of[static_cast<std::size_t>(std::lower_bound(points.begin(), points.end(), quantized[i]) - points.begin())] = i;
+    for (const auto& f : g.surface) {
+      const std::uint32_t a = input_of[f[0]], b = input_of[f[1]], d = input_of[f[2]];
+      const std::uint32_t opposite = 6 - a - b - d;
+      CHECK(orient(m.points[a], m.points[b], m.points[d], m.points[opposite]) < 0);
+    }
   }
 }
