@@ -339,7 +339,8 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto dt = delaunay(pts);
   const auto t1 = std::chrono::steady_clock::now();
-  const auto truth = truth_labels(pts, dt, gp, surface, surface);
+  double unsure = 0;
+  const auto truth = truth_labels(pts, dt, gp, surface, surface, nullptr, false, &unsure);
   const auto t2 = std::chrono::steady_clock::now();
   // Border vertices of an open input surface.
   std::vector<std::uint32_t> border;
@@ -366,7 +367,14 @@ int main(int argc, char** argv) {
       ti.target_euler = t.euler;
     }
   }
-  const auto params = tune(pts, dt, kind, ti, fidelity, &rep);
+  auto params = tune(pts, dt, kind, ti, fidelity, &rep);
+  if (kind == Kind::surface && !border.empty() && unsure > kSheetUnsure) {  // as the encoder does
+    TuneInput sheet = ti;
+    sheet.truth = truth_labels(pts, dt, gp, surface, surface, nullptr, true);
+    TuningReport sheet_rep;
+    auto sheet_params = tune(pts, dt, kind, sheet, fidelity, &sheet_rep);
+    if (write_recon(sheet_params).size() < write_recon(params).size()) params = std::move(sheet_params), rep = std::move(sheet_rep);
+  }
   const auto t3 = std::chrono::steady_clock::now();
   const auto rec = reconstruct(pts, dt, kind, params);
   const auto t4 = std::chrono::steady_clock::now();

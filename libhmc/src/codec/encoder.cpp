@@ -134,7 +134,9 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
     if (g[0] != ~0u && g[1] != ~0u && g[2] != ~0u && g[0] != g[1] && g[1] != g[2] && g[0] != g[2]) faces.push_back(g);
   }
   TuneInput ti;
-  if (!surface.empty()) ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, lossy ? nullptr : winding);
+  double unsure = 0;
+  if (!surface.empty())
+    ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, lossy ? nullptr : winding, false, &unsure);
   if (kind == Kind::surface) {
     // Level indices: ascending (RCON gap-codes the list) and distinct. A
     // lossy level's points are not in the input's order.
@@ -167,6 +169,22 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   }
   TuningReport tr;
   plan.params = tune(plan.points, dt, kind, ti, fidelity, &tr);
+  // An open surface whose winding numbers leave many labels open is a
+  // sheet rather than a solid with holes (the Stanford bunny leaves 0.4 %
+  // open, a height field 99 %): plan it read as a sheet too (truth_labels)
+  // and keep whichever sends less side information. A generated
+  // 1,600-point height field at q = 12: side information 13.5 -> 7.9 bits
+  // per point, 78 % -> 95 % of the reachable triangles.
+  if (kind == Kind::surface && !coarser && !lossy && !fine.border.empty() && unsure > kSheetUnsure) {
+    TuneInput sheet = ti;
+    sheet.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, winding, true);
+    TuningReport sheet_tr;
+    ReconParams sheet_params = tune(plan.points, dt, kind, sheet, fidelity, &sheet_tr);
+    if (write_recon(sheet_params).size() < write_recon(plan.params).size()) {
+      plan.params = std::move(sheet_params);
+      tr = std::move(sheet_tr);
+    }
+  }
   plan.rec = tr.labels.empty() ? reconstruct(plan.points, dt, kind, plan.params)
                                : reconstruct_from_labels(dt, kind, plan.params, std::move(tr.labels), &tr.candidates);
   plan.report.label_corrections = toggle_count(plan.params);

@@ -323,7 +323,8 @@ std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, co
 
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
-                                       const std::vector<Triangle>& input_faces_on_points, WindingCache* cache) {
+                                       const std::vector<Triangle>& input_faces_on_points, WindingCache* cache,
+                                       bool sheet, double* unsure) {
   const std::size_t nt = dt.tets.size();
   // The tree of an earlier call on the same surface (the input's, level
   // after level) is the same tree.
@@ -355,7 +356,7 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   int b = 0;
   while (b < 32 && (any >> b) != 0) ++b;
   const int field = b + 2;
-  const bool use_cache = cache && 3 * field <= 64;
+  const bool use_cache = cache && 3 * field <= 64 && !sheet;
   if (cache && cache->field != field) cache->entries.clear();  // keys packed otherwise
   auto key_of = [&](std::size_t t) {
     std::uint64_t sum[3] = {0, 0, 0};
@@ -382,14 +383,14 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
       Vec3 c{0, 0, 0};
       for (auto v : dt.tets[t])
         for (int a = 0; a < 3; ++a) c[a] += 0.25 * points[v][a];
-      w[t] = std::abs(wn(c));
+      w[t] = sheet ? wn(c) : std::abs(wn(c));
     }
   };
   std::future<void> other;
   if (cache && cache->helpers && nt >= 1024) other = cache->helpers->try_run([&] { fill(nt / 2, nt); });
   fill(0, other.valid() ? nt / 2 : nt);
   if (other.valid()) other.get();
-  if (cache) {
+  if (cache && !sheet) {
     std::vector<Entry>().swap(cache->entries);  // this level's replace the previous level's
     cache->field = field;
     if (use_cache) {
@@ -400,10 +401,23 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   }
   std::vector<std::uint8_t> label(nt);
   std::vector<std::uint8_t> sure(nt);
-  for (std::size_t t = 0; t < nt; ++t) {
-    label[t] = w[t] > 0.5;
-    sure[t] = w[t] < 0.25 || w[t] > 0.75;
+  if (sheet) {
+    double sum = 0;  // the prevailing orientation: the sign of the clear values' sum
+    for (std::size_t t = 0; t < nt; ++t)
+      if (std::abs(w[t]) > 0.25) sum += w[t];
+    const double sign = sum < 0 ? -1.0 : 1.0;
+    for (std::size_t t = 0; t < nt; ++t) {
+      const double v = sign * w[t];
+      label[t] = v > 0.1;
+      sure[t] = std::abs(v - 0.1) > 0.2;
+    }
+  } else {
+    for (std::size_t t = 0; t < nt; ++t) {
+      label[t] = w[t] > 0.5;
+      sure[t] = w[t] < 0.25 || w[t] > 0.75;
+    }
   }
+  if (unsure) *unsure = nt ? static_cast<double>(std::count(sure.begin(), sure.end(), std::uint8_t{0})) / static_cast<double>(nt) : 0.0;
   // A tetrahedron whose centroid lies near the surface (flat ones on it):
   // across an input face the label changes, across any other face it does
   // not. Settle it by the votes of settled neighbours, a few rounds.
