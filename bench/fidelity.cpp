@@ -373,7 +373,10 @@ int main(int argc, char** argv) {
     sheet.truth = truth_labels(pts, dt, gp, surface, surface, nullptr, true);
     TuningReport sheet_rep;
     auto sheet_params = tune(pts, dt, kind, sheet, fidelity, &sheet_rep);
-    if (write_recon(sheet_params).size() < write_recon(params).size()) params = std::move(sheet_params), rep = std::move(sheet_rep);
+    if (write_recon(sheet_params).size() < write_recon(params).size()) {
+      params = std::move(sheet_params);
+      rep = std::move(sheet_rep);
+    }
   }
   const auto t3 = std::chrono::steady_clock::now();
   const auto rec = reconstruct(pts, dt, kind, params);

@@ -1366,8 +1366,10 @@ TEST_CASE("the input's boundary faces the way the input's own tetrahedra say, wh
     REQUIRE(g.surface.size() == 4);
     // Back to input indices: each face has the fourth vertex behind it.
     std::vector<std::uint32_t> input_of(points.size());
-    for (std::uint32_t i = 0; i < 4; ++i)
-      input_of[static_cast<std::size_t>(std::lower_bound(points.begin(), points.end(), quantized[i]) - points.begin())] = i;
+    for (std::uint32_t i = 0; i < 4; ++i) {
+      const auto at = std::lower_bound(points.begin(), points.end(), quantized[i]) - points.begin();
+      input_of[static_cast<std::size_t>(at)] = i;
+    }
     for (const auto& f : g.surface) {
       const std::uint32_t a = input_of[f[0]], b = input_of[f[1]], d = input_of[f[2]];
       const std::uint32_t opposite = 6 - a - b - d;

@@ -89,9 +89,11 @@ int cmd_enc(int argc, char** argv) {
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");
   if (!a.ok() || a.positional().size() != 1 || (out.empty() && !a.has("--canonical"))) {
     std::fprintf(stderr,
-                 "hmc enc: %s\nusage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--boundary M]\n"
-                 "                  [--optimizer O] [--fidelity F] [--vq-bits B [--vq-residual S]] [--fast-decode]\n"
-                 "                  [--canonical DIR] [--no-info] [--threads N] [--json]   (hmc --help: what each does)\n",
+                 "hmc enc: %s\n"
+                 "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R]\n"
+                 "                  [--boundary M] [--optimizer O] [--fidelity F] [--vq-bits B [--vq-residual S]]\n"
+                 "                  [--fast-decode] [--canonical DIR] [--no-info] [--threads N] [--json]\n"
+                 "                  (hmc --help says what each does)\n",
                  a.ok() ? "need one input file and -o OUT.hmc" : a.error().c_str());
     return kUsage;
   }

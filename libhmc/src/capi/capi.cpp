@@ -356,7 +356,8 @@ hmc_status hmc_decoder_set_threads(hmc_decoder* decoder, unsigned threads) {
   if (!decoder) return HMC_INVALID_ARGUMENT;
   return guard(decoder->message, [&]() -> hmc_status {
     if (decoder->begun()) return decoder->misuse("threads must be set before decoding begins");
-    if (threads < 1 || threads > 64) return decoder->misuse("threads must be between 1 and 64, got " + std::to_string(threads));
+    if (threads < 1 || threads > 64)
+      return decoder->misuse("threads must be between 1 and 64, got " + std::to_string(threads));
     decoder->options.threads = threads;
     return HMC_OK;
   });

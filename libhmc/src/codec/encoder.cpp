@@ -486,13 +486,16 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
         });
     }
     plan.report.simplices = rep.kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
-    if (k + 1 < options.levels && current.empty())
-      stopped = !more                       ? "it has " + std::to_string(plan.points.size()) + (plan.points.size() == 1 ? " point" : " points")
-                : !plan.added.empty()        ? std::string("the decimation would remove all its points")
-                : dt.tets.empty()            ? std::string("its points span no volume")
-                : plan.report.simplices == 0 && rep.kind != Kind::points
-                    ? std::string("its reconstruction has no ") + (rep.kind == Kind::surface ? "triangles" : "tetrahedra")
-                    : std::string("the decimation found no point to remove");
+    if (k + 1 < options.levels && current.empty()) {
+      const std::string simplices = rep.kind == Kind::surface ? "triangles" : "tetrahedra";
+      const std::size_t n = plan.points.size();
+      const bool unrebuilt = plan.report.simplices == 0 && rep.kind != Kind::points;
+      stopped = !more                ? "it has " + std::to_string(n) + (n == 1 ? " point" : " points")
+                : !plan.added.empty() ? std::string("the decimation would remove all its points")
+                : dt.tets.empty()     ? std::string("its points span no volume")
+                : unrebuilt           ? "its reconstruction has no " + simplices
+                                      : std::string("the decimation found no point to remove");
+    }
     if (k == 0 && rep.kind != Kind::points && dt.tets.empty())
       rep.notes.push_back("the " + std::to_string(plan.points.size()) +
                           " points span no volume (all coplanar or collinear on the grid): the decoder rebuilds "

@@ -417,7 +417,10 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
       sure[t] = w[t] < 0.25 || w[t] > 0.75;
     }
   }
-  if (unsure) *unsure = nt ? static_cast<double>(std::count(sure.begin(), sure.end(), std::uint8_t{0})) / static_cast<double>(nt) : 0.0;
+  if (unsure) {
+    const auto open = static_cast<double>(std::count(sure.begin(), sure.end(), std::uint8_t{0}));
+    *unsure = nt ? open / static_cast<double>(nt) : 0.0;
+  }
   // A tetrahedron whose centroid lies near the surface (flat ones on it):
   // across an input face the label changes, across any other face it does
   // not. Settle it by the votes of settled neighbours, a few rounds.

@@ -54,8 +54,7 @@ struct WindingCache {
   /// numbers are computed in two halves at once; the values are the same.
   HelperBudget* helpers = nullptr;
 };
-///
-/// `sheet`: read the surface as an open sheet, whose two sides have
+/// truth_labels(), described above WindingCache. `sheet`: read the surface as an open sheet, whose two sides have
 /// winding numbers near +1/2 and -1/2 (their magnitudes do not tell them
 /// apart): inside is where the winding number, signed by the surface's
 /// prevailing orientation, exceeds 1/10. Signed values are not cached.
