@@ -22,6 +22,7 @@
 #include <string>
 
 #include "codec/format.hpp"
+#include "codec/input_grid.hpp"
 #include "delaunay/delaunay.hpp"
 #include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
@@ -330,11 +331,9 @@ int main(int argc, char** argv) {
     auto s = sorted4(f);
     if (s[0] != s[1] && s[1] != s[2] && s[2] != s[3]) in_tets.push_back(f);
   }
-  // Outward as the encoder turns them: by the tetrahedra's orientation in
-  // the input's own coordinates (rounding can invert a thin one).
-  std::vector<Vec3> own(pts.size());
-  for (std::size_t i = 0; i < g.size(); ++i) own[idx[i]] = m.points[i];
-  std::vector<Face> surface = kind == Kind::volume ? boundary_faces(own, in_tets) : in_tris;
+  // A volume's boundary as the encoder turns it (input_on_grid: by the
+  // tetrahedra's orientation in the input's own coordinates).
+  std::vector<Face> surface = kind == Kind::volume ? input_on_grid(m, g, pts).surface : in_tris;
 
   const auto t0 = std::chrono::steady_clock::now();
   const auto dt = delaunay(pts);

@@ -204,21 +204,22 @@ double WindingNumber::operator()(const Vec3& q) const {
 }
 
 std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std::vector<Tetrahedron>& tets) {
-  std::vector<Triangle> faces;
-  faces.reserve(tets.size() * 4);
-  for (const auto& t : tets) {
+  std::vector<Tetrahedron> positive(tets);
+  for (auto& t : positive) {
     const Vec3 u = sub(points[t[1]], points[t[0]]), v = sub(points[t[2]], points[t[0]]),
                w = sub(points[t[3]], points[t[0]]);
-    const bool positive = dot(u, cross(v, w)) > 0;
-    // Faces opposite each vertex, counter-clockwise from outside for a
-    // positively oriented tetrahedron; reversed otherwise.
-    const int fv[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-    for (const auto& f : fv) {
-      Triangle tri{t[f[0]], t[f[1]], t[f[2]]};
-      if (!positive) std::swap(tri[1], tri[2]);
-      faces.push_back(tri);
-    }
+    if (!(dot(u, cross(v, w)) > 0)) std::swap(t[2], t[3]);
   }
+  return boundary_faces(positive);
+}
+
+std::vector<Triangle> boundary_faces(const std::vector<Tetrahedron>& positive) {
+  std::vector<Triangle> faces;
+  faces.reserve(positive.size() * 4);
+  // Faces opposite each vertex, counter-clockwise from outside.
+  const int fv[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  for (const auto& t : positive)
+    for (const auto& f : fv) faces.push_back({t[f[0]], t[f[1]], t[f[2]]});
   return single_faces(faces);
 }
 

@@ -59,4 +59,8 @@ class WindingNumber {
 /// orientation of the tetrahedra.
 std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std::vector<Tetrahedron>& tets);
 
+/// The same for tetrahedra whose orientation is known to be positive
+/// (orient3d > 0 in whatever coordinates they were oriented in).
+std::vector<Triangle> boundary_faces(const std::vector<Tetrahedron>& positive);
+
 }  // namespace hmc::detail
