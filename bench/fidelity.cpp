@@ -331,9 +331,10 @@ int main(int argc, char** argv) {
     auto s = sorted4(f);
     if (s[0] != s[1] && s[1] != s[2] && s[2] != s[3]) in_tets.push_back(f);
   }
-  // A volume's boundary as the encoder turns it (input_on_grid: by the
-  // tetrahedra's orientation in the input's own coordinates).
-  std::vector<Face> surface = kind == Kind::volume ? input_on_grid(m, g, pts).surface : in_tris;
+  // The surface the encoder aims at (input_on_grid): a volume's boundary
+  // turned by its tetrahedra's orientation in the input's own coordinates,
+  // or the triangles made to agree in orientation.
+  const std::vector<Face> surface = input_on_grid(m, g, pts).surface;
 
   const auto t0 = std::chrono::steady_clock::now();
   const auto dt = delaunay(pts);

@@ -169,6 +169,30 @@ TEST_CASE("kind is detected from the connectivity and can be overridden") {
   CHECK(decode_ok(e.bytes).kind == Kind::volume);
 }
 
+TEST_CASE("triangles turned over at random, or all of them, give the stream of the consistent surface") {
+  const Mesh torus = samples::torus(40, 20);
+  EncodeOptions o;
+  o.levels = 2;
+  const auto reference = encode(torus, o).value().bytes;
+  samples::Rng rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  Mesh mixed = torus, reversed = torus;
+  std::size_t turned = 0;
+  for (auto& t : mixed.triangles)
+    if (u(rng) < 0.3) std::swap(t[1], t[2]), ++turned;
+  for (auto& t : reversed.triangles) std::swap(t[1], t[2]);
+  REQUIRE(turned > 100);
+  CHECK(encode(mixed, o).value().bytes == reference);
+  CHECK(encode(reversed, o).value().bytes == reference);
+  // An open sheet too (its reading as a sheet depends on the orientation).
+  const Mesh sheet = samples::height_field(16, 0.3);
+  const auto sheet_reference = encode(sheet, o).value().bytes;
+  Mesh sheet_mixed = sheet;
+  for (std::size_t i = 0; i < sheet_mixed.triangles.size(); i += 3)
+    std::swap(sheet_mixed.triangles[i][1], sheet_mixed.triangles[i][2]);
+  CHECK(encode(sheet_mixed, o).value().bytes == sheet_reference);
+}
+
 TEST_CASE("the report notes fewer levels than requested and points that span no volume") {
   auto notes_of = [](const Mesh& m, int levels, std::optional<Kind> kind = std::nullopt) {
     EncodeOptions o;

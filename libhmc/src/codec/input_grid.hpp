@@ -22,7 +22,9 @@ struct InputOnGrid {
 /// points in canonical order. Tetrahedra win over triangles (a volume file
 /// may also list triangles that are not its boundary); their boundary faces
 /// are turned outward by the tetrahedra's orientation in the input's own
-/// coordinates, which rounding to the grid can flatten or invert.
+/// coordinates, which rounding to the grid can flatten or invert. Triangles
+/// are made to agree in orientation across their edges, each connected
+/// piece keeping the orientation most of its triangles have.
 InputOnGrid input_on_grid(const Mesh& input, const std::vector<GridPoint>& quantized,
                           const std::vector<GridPoint>& points);
 
