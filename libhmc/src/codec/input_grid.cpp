@@ -17,7 +17,9 @@ namespace {
 // then turned as a whole if that turned most of its triangles, so that a
 // consistent input, or one turned over entirely, stays as it is. An edge that
 // would turn a triangle twice (a non-orientable piece) is left alone.
-void orient_consistently(std::vector<Triangle>& tris) {
+// Returns the ends of the border edges (used by one triangle only),
+// ascending and distinct.
+std::vector<std::uint32_t> orient_consistently(std::vector<Triangle>& tris) {
   const auto n = static_cast<std::uint32_t>(tris.size());
   struct Use {
     std::uint64_t edge;  // (min << 32) | max
@@ -42,9 +44,14 @@ void orient_consistently(std::vector<Triangle>& tris) {
     bool same;
   };
   std::vector<Link> links;
+  std::vector<std::uint32_t> border;
   for (std::size_t i = 0; i < uses.size();) {
     std::size_t j = i;
     while (j < uses.size() && uses[j].edge == uses[i].edge) ++j;
+    if (j - i == 1) {
+      border.push_back(static_cast<std::uint32_t>(uses[i].edge >> 32));
+      border.push_back(static_cast<std::uint32_t>(uses[i].edge & 0xffffffffu));
+    }
     if (j - i == 2 && uses[i].tri != uses[i + 1].tri) {
       const bool same = uses[i].forward == uses[i + 1].forward;
       links.push_back({uses[i].tri, uses[i + 1].tri, same});
@@ -86,6 +93,9 @@ void orient_consistently(std::vector<Triangle>& tris) {
     for (auto t : piece)
       if ((turn[t] != 0) != invert) std::swap(tris[t][1], tris[t][2]);
   }
+  std::sort(border.begin(), border.end());
+  border.erase(std::unique(border.begin(), border.end()), border.end());
+  return border;
 }
 
 }  // namespace
@@ -106,18 +116,12 @@ InputOnGrid input_on_grid(const Mesh& input, const std::vector<GridPoint>& quant
     // faces, winding numbers 0.62 instead of 1 at 5 % of the diagonal
     // inside).
     std::vector<Tetrahedron> tets;
-    for (const auto& t : input.tetrahedra) {
-      Tetrahedron f{idx[t[0]], idx[t[1]], idx[t[2]], idx[t[3]]};
-      auto s = f;
+    for (Tetrahedron t : input.tetrahedra) {
+      Tetrahedron s{idx[t[0]], idx[t[1]], idx[t[2]], idx[t[3]]};
       std::sort(s.begin(), s.end());
       if (s[0] == s[1] || s[1] == s[2] || s[2] == s[3]) continue;
-      const Vec3 &a = input.points[t[0]], &b = input.points[t[1]], &c = input.points[t[2]], &d = input.points[t[3]];
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
-                   w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-      const double volume6 = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-                             u[2] * (v[0] * w[1] - v[1] * w[0]);
-      if (!(volume6 > 0)) std::swap(f[2], f[3]);
-      tets.push_back(f);
+      orient_positive(input.points, t);
+      tets.push_back({idx[t[0]], idx[t[1]], idx[t[2]], idx[t[3]]});
     }
     g.surface = boundary_faces(tets);
   } else if (!input.triangles.empty()) {
@@ -125,26 +129,7 @@ InputOnGrid input_on_grid(const Mesh& input, const std::vector<GridPoint>& quant
       const Triangle f{idx[t[0]], idx[t[1]], idx[t[2]]};
       if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) g.surface.push_back(f);
     }
-    orient_consistently(g.surface);
-    // Border edges: used by one triangle only.
-    std::vector<std::uint64_t> edges;
-    for (const auto& f : g.surface)
-      for (int k = 0; k < 3; ++k) {
-        const std::uint64_t a = std::min(f[k], f[(k + 1) % 3]), b = std::max(f[k], f[(k + 1) % 3]);
-        edges.push_back((a << 32) | b);
-      }
-    std::sort(edges.begin(), edges.end());
-    for (std::size_t i = 0; i < edges.size();) {
-      std::size_t j = i;
-      while (j < edges.size() && edges[j] == edges[i]) ++j;
-      if (j - i == 1) {
-        g.border.push_back(static_cast<std::uint32_t>(edges[i] >> 32));
-        g.border.push_back(static_cast<std::uint32_t>(edges[i] & 0xffffffffu));
-      }
-      i = j;
-    }
-    std::sort(g.border.begin(), g.border.end());
-    g.border.erase(std::unique(g.border.begin(), g.border.end()), g.border.end());
+    g.border = orient_consistently(g.surface);
   }
   return g;
 }

@@ -203,13 +203,15 @@ double WindingNumber::operator()(const Vec3& q) const {
   return query(1, q) / (4 * kPi);
 }
 
+void orient_positive(const std::vector<Vec3>& points, Tetrahedron& t) {
+  const Vec3 u = sub(points[t[1]], points[t[0]]), v = sub(points[t[2]], points[t[0]]),
+             w = sub(points[t[3]], points[t[0]]);
+  if (!(dot(u, cross(v, w)) > 0)) std::swap(t[2], t[3]);
+}
+
 std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std::vector<Tetrahedron>& tets) {
   std::vector<Tetrahedron> positive(tets);
-  for (auto& t : positive) {
-    const Vec3 u = sub(points[t[1]], points[t[0]]), v = sub(points[t[2]], points[t[0]]),
-               w = sub(points[t[3]], points[t[0]]);
-    if (!(dot(u, cross(v, w)) > 0)) std::swap(t[2], t[3]);
-  }
+  for (auto& t : positive) orient_positive(points, t);
   return boundary_faces(positive);
 }
 

@@ -59,6 +59,9 @@ class WindingNumber {
 /// orientation of the tetrahedra.
 std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std::vector<Tetrahedron>& tets);
 
+/// Swap t's last two vertices unless it is positively oriented at `points`.
+void orient_positive(const std::vector<Vec3>& points, Tetrahedron& t);
+
 /// The same for tetrahedra whose orientation is known to be positive
 /// (orient3d > 0 in whatever coordinates they were oriented in).
 std::vector<Triangle> boundary_faces(const std::vector<Tetrahedron>& positive);
