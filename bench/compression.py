@@ -193,7 +193,7 @@ def bench_model(a, tools, tmp, name, path, log):
     log(f"  {name}: encode ({LEVELS} levels), each run after one Delaunay")
     enc4, del_runs, r_enc, r_enc_wall = measure_paired(
         [tools["hmc"], "enc", path, "-o", h4, "--bits", str(Q), "--levels", str(LEVELS), "--json", "--threads", "1"],
-        del_cmd, a.repeat, a.budget)
+        del_cmd, a.pairs, a.budget)
     rep4 = json.loads(enc4["out"])
     n0 = rep4["distinct_points"]
     if rep1["distinct_points"] != n0:
@@ -207,7 +207,7 @@ def bench_model(a, tools, tmp, name, path, log):
     # decoder's default, two threads where the machine has them (each level's
     # reconstruction overlapping the next level's decoding), is timed beside.
     r["t_dec"], more, r_dec, r_dec_wall = measure_paired([tools["hmc"], "dec", h4, "--json", "--threads", "1"],
-                                                         del_cmd, a.repeat, a.budget)
+                                                         del_cmd, a.pairs, a.budget)
     del_runs += more
     r["t_dec2"] = measure([tools["hmc"], "dec", h4, "--json", "--threads", "2"], a.repeat, a.budget)
     if json.loads(r["t_dec2"]["out"])["levels"] != json.loads(r["t_dec"]["out"])["levels"]:
@@ -501,7 +501,7 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         f"{tools['draco']}; Python {sys.version.split()[0]}.  ")
     say(f"Machine: {os.cpu_count()} cores, shared with other jobs (load average {loads[0]:.1f} at the start, "
         f"{loads[1]:.1f} at the end), so every time is the **median** of up to {a.repeat} runs "
-        f"(fewer when the runs of one measurement exceeded {a.budget:g} s; counts in section 4). "
+        f"({a.pairs} for the encode and the one-thread decode of the bars; fewer when the runs of one measurement exceeded {a.budget:g} s; counts in section 4). "
         "Times are CPU seconds (user + system, `wait4` rusage) of whole processes, which the other jobs "
         "disturb far less than wall-clock time (shown beside); every program here runs on one thread (`hmc "
         "--threads 1`), except the one decode marked *two threads* (`hmc dec --threads 2`, the default on a "
@@ -513,7 +513,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         "Draco too. The ratio base is one canonical Delaunay of the finest level's points "
         "(`bench/delaunay_time`: TetGen plus the canonical sort, adjacency and certificate, "
         "as the decoder runs it), measured in the same run: it runs once before each timed encode and each "
-        "timed one-thread decode of all levels, and the bars' time ratios are the medians of those pairs' ratios "
+        f"timed one-thread decode of all levels (up to {a.pairs} pairs each), and the bars' time ratios are the "
+        "medians of those pairs' ratios "
         "(the other ratios divide medians by the median of all its runs).")
     say("")
 
@@ -792,6 +793,8 @@ def main():
     ap.add_argument("--out", default=os.path.join(here, "results", "compression.md"))
     ap.add_argument("--plots", help="PNG directory (default: beside --out, compression/)")
     ap.add_argument("--repeat", type=int, default=3, help="runs per timing (median), default 3")
+    ap.add_argument("--pairs", type=int, default=5,
+                    help="alternating runs of the Delaunay and of each timed bar command (median ratio), default 5")
     ap.add_argument("--budget", type=float, default=40.0,
                     help="stop repeating one measurement after this many seconds (at least one run)")
     ap.add_argument("--models", help="comma-separated substrings: only these models")
