@@ -678,7 +678,7 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
     # 3. Ratios in detail.
     say("## 3. Time and memory ratios")
     say("")
-    say(f"CPU-time ratios decide the bars; the wall-clock ratios (same medians) show how much the shared machine "
+    say(f"CPU-time ratios decide the bars; the wall-clock ratios (medians over the same pairs) show how much the shared machine "
         f"moved them. The other columns are informative: *Σ levels* is the points of all {LEVELS} levels over the "
         "finest level's, i.e. how many finest-level Delaunays a decoder does that rebuilds every level from "
         "scratch; *1-level* columns decode the 1-level stream of the same model (one Delaunay plus the "
