@@ -501,7 +501,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         f"{tools['draco']}; Python {sys.version.split()[0]}.  ")
     say(f"Machine: {os.cpu_count()} cores, shared with other jobs (load average {loads[0]:.1f} at the start, "
         f"{loads[1]:.1f} at the end), so every time is the **median** of up to {a.repeat} runs "
-        f"({a.pairs} for the encode and the one-thread decode of the bars; fewer when the runs of one measurement exceeded {a.budget:g} s; counts in section 4). "
+        f"({a.pairs} for the encode and the one-thread decode of the bars; fewer when the runs of one "
+        f"measurement exceeded {a.budget:g} s; counts in section 4). "
         "Times are CPU seconds (user + system, `wait4` rusage) of whole processes, which the other jobs "
         "disturb far less than wall-clock time (shown beside); every program here runs on one thread (`hmc "
         "--threads 1`), except the one decode marked *two threads* (`hmc dec --threads 2`, the default on a "
@@ -515,7 +516,7 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         "as the decoder runs it), measured in the same run: it runs once before each timed encode and each "
         f"timed one-thread decode of all levels (up to {a.pairs} pairs each), and the bars' time ratios are the "
         "medians of those pairs' ratios "
-        "(the other ratios divide medians by the median of all its runs).")
+        "(the other ratios divide medians by the median of all the base's runs).")
     say("")
 
     # Summary.
@@ -678,8 +679,8 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
     # 3. Ratios in detail.
     say("## 3. Time and memory ratios")
     say("")
-    say(f"CPU-time ratios decide the bars; the wall-clock ratios (medians over the same pairs) show how much the shared machine "
-        f"moved them. The other columns are informative: *Σ levels* is the points of all {LEVELS} levels over the "
+    say(f"CPU-time ratios decide the bars; the wall-clock ratios (medians over the same pairs) show how much the "
+        f"shared machine moved them. The other columns are informative: *Σ levels* is the points of all {LEVELS} levels over the "
         "finest level's, i.e. how many finest-level Delaunays a decoder does that rebuilds every level from "
         "scratch; *1-level* columns decode the 1-level stream of the same model (one Delaunay plus the "
         "reconstruction rule), separating the cost of reconstructing one level from that of the levels; "
