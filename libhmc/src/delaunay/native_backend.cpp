@@ -100,6 +100,7 @@ class Builder {
     int face;            // its face on the cavity boundary
   };
   std::vector<Boundary> boundary_;
+  // The hull edges of a seeded tetrahedralization (seed()).
   struct EdgeSlot {
     std::uint64_t key;
     std::uint32_t cell;
