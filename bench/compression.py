@@ -124,7 +124,7 @@ def summarize(runs):
     """Medians of wall s, CPU s and peak MiB of runs of one command."""
     return {"wall": statistics.median(r["wall"] for r in runs), "cpu": statistics.median(r["cpu"] for r in runs),
             "rss": statistics.median(r["rss"] for r in runs), "runs": len(runs), "out": runs[-1]["out"],
-            "cpus": [r["cpu"] for r in runs]}
+            "outs": [r["out"] for r in runs], "cpus": [r["cpu"] for r in runs]}
 
 
 def find_models(data, only):
@@ -210,7 +210,8 @@ def bench_model(a, tools, tmp, name, path, log):
                                                          del_cmd, a.pairs, a.budget)
     del_runs += more
     r["t_dec2"] = measure([tools["hmc"], "dec", h4, "--json", "--threads", "2"], a.repeat, a.budget)
-    if json.loads(r["t_dec2"]["out"])["levels"] != json.loads(r["t_dec"]["out"])["levels"]:
+    untimed = lambda out: [{k: v for k, v in l.items() if not k.endswith("_seconds")} for l in json.loads(out)["levels"]]
+    if untimed(r["t_dec2"]["out"]) != untimed(r["t_dec"]["out"]):
         fail(f"{name}: decoding on two threads gives other levels than on one")
     r["t_decp"] = measure([tools["hmc"], "dec", h4, "--json", "--points-only"], a.repeat, a.budget)
     dec = json.loads(r["t_dec"]["out"])
@@ -219,6 +220,12 @@ def bench_model(a, tools, tmp, name, path, log):
     want = [(l["level"], l["points"], l["stream_bytes"]) for l in rep4["levels"]]
     r["decode_mismatch"] = None if got == want and not dec["truncated"] else f"decoded {got}, encoder reported {want}"
     r["dec_levels"] = dec["levels"]
+    # Where the one-thread decode's time goes: `hmc dec --json` times its
+    # phases per level (points; tetrahedralization and reconstruction);
+    # medians over the runs, coarsest level first.
+    runs = [json.loads(o)["levels"] for o in r["t_dec"]["outs"]]
+    r["phases"] = [{key: statistics.median(run[i].get(key, 0.0) for run in runs)
+                    for key in ("points_seconds", "rebuild_seconds")} for i in range(len(runs[0]))]
     # Informative: the finest level alone rebuilt (what `hmc dec -o` does).
     r["t_decf"] = measure([tools["hmc"], "dec", h4, "--json", "--rebuild", "finest", "--threads", "1"], a.repeat,
                           a.budget)
@@ -711,6 +718,28 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         "reconstruction well under half a Delaunay and the coarser levels nearly free, though each needs its own "
         "Delaunay refinement, the rule and the repair of spec 11.4a.")
     say("")
+    say("Where the one-thread decoding of all levels spends its time: `hmc dec --json` times each level's phases "
+        "(wall-clock time between the decoder's progress calls, medians over the runs of the bar): its *points* "
+        "(the layer, with its side information) and its *rebuild* (the Delaunay tetrahedralization, refined from "
+        "the coarser level's, then the reconstruction), each over the Delaunay base's wall-clock time. The columns "
+        "add up to the decode's ratio, less the file's reading and the process's start-up.")
+    say("")
+    say("| model | points, all levels | of which the base layer | rebuild, finest level | rebuild, coarser levels "
+        "| sum |")
+    say("|---|---:|---:|---:|---:|---:|")
+    shares = []
+    for r in results:
+        base = r["t_del"]["wall"]
+        ph = r["phases"]
+        pts = sum(p["points_seconds"] for p in ph) / base
+        first = ph[0]["points_seconds"] / base
+        fin = ph[-1]["rebuild_seconds"] / base
+        coarser = sum(p["rebuild_seconds"] for p in ph[:-1]) / base
+        shares.append((pts, first, fin, coarser))
+        say(f"| {r['name']} | {pts:.2f} | {first:.2f} | {fin:.2f} | {coarser:.2f} | {pts + fin + coarser:.2f} |")
+    g = [statistics.geometric_mean(x[i] for x in shares) for i in range(4)]
+    say(f"| **geometric mean** | {g[0]:.2f} | {g[1]:.2f} | {g[2]:.2f} | {g[3]:.2f} | |")
+    say("")
 
     # 4. Raw times.
     say("## 4. Times and peak memory")
@@ -858,7 +887,7 @@ def main():
     argv = "bench/compression.py" + "".join(" " + shlex.quote(x) for x in sys.argv[1:])
     report(a, argv, tools, results, big, started, time.time() - started, loads, plot_files, os.path.abspath(a.out))
     # The raw numbers, for comparing runs (command outputs dropped).
-    strip = lambda v: {k: strip(x) for k, x in v.items() if k != "out"} if isinstance(v, dict) else v
+    strip = lambda v: {k: strip(x) for k, x in v.items() if k not in ("out", "outs")} if isinstance(v, dict) else v
     raw = os.path.join(plot_dir, "results.json")
     with open(raw, "w") as f:
         json.dump({"command": argv, "date": time.strftime("%Y-%m-%d %H:%M", time.localtime(started)),

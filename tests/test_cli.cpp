@@ -119,9 +119,19 @@ TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each,
   r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --json");
   REQUIRE(r.code == 0);
   CHECK(count(r.out, "\"rebuilt\": true") == 3);
+  // Each level's phases are timed: its points always, its rebuild when
+  // there is one.
+  CHECK(count(r.out, "\"points_seconds\": ") == 3);
+  CHECK(count(r.out, "\"rebuild_seconds\": ") == 3);
   r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --json --rebuild finest");
   REQUIRE(r.code == 0);
   CHECK(count(r.out, "\"rebuilt\": false") == 2);
+  CHECK(count(r.out, "\"points_seconds\": ") == 3);
+  CHECK(count(r.out, "\"rebuild_seconds\": ") == 1);
+  r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " --json --points-only");
+  REQUIRE(r.code == 0);
+  CHECK(count(r.out, "\"points_seconds\": ") == 3);
+  CHECK(count(r.out, "\"rebuild_seconds\": ") == 0);
   r = hmc_run(dir, "dec " + q(dir + "/t.hmc") + " -o " + q(dir + "/three.ply") + " --json --rebuild all");
   REQUIRE(r.code == 0);
   CHECK(count(r.out, "\"rebuilt\": true") == 3);
