@@ -221,11 +221,13 @@ def bench_model(a, tools, tmp, name, path, log):
     r["decode_mismatch"] = None if got == want and not dec["truncated"] else f"decoded {got}, encoder reported {want}"
     r["dec_levels"] = dec["levels"]
     # Where the one-thread decode's time goes: `hmc dec --json` times its
-    # phases per level (points; tetrahedralization and reconstruction);
-    # medians over the runs, coarsest level first.
-    runs = [json.loads(o)["levels"] for o in r["t_dec"]["outs"]]
-    r["phases"] = [{key: statistics.median(run[i].get(key, 0.0) for run in runs)
-                    for key in ("points_seconds", "rebuild_seconds")} for i in range(len(runs[0]))]
+    # phases per level (points; tetrahedralization and reconstruction). Per
+    # level, coarsest first, the median over the runs of each phase's share
+    # of its own run's decode_seconds (shares within one run: a slow spell
+    # of the machine moves them far less than the seconds).
+    runs = [json.loads(o) for o in r["t_dec"]["outs"]]
+    r["phases"] = [{key: statistics.median(run["levels"][i].get(key, 0.0) / run["decode_seconds"] for run in runs)
+                    for key in ("points_seconds", "rebuild_seconds")} for i in range(len(runs[0]["levels"]))]
     # Informative: the finest level alone rebuilt (what `hmc dec -o` does).
     r["t_decf"] = measure([tools["hmc"], "dec", h4, "--json", "--rebuild", "finest", "--threads", "1"], a.repeat,
                           a.budget)
@@ -719,26 +721,30 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         "Delaunay refinement, the rule and the repair of spec 11.4a.")
     say("")
     say("Where the one-thread decoding of all levels spends its time: `hmc dec --json` times each level's phases "
-        "(wall-clock time between the decoder's progress calls, medians over the runs of the bar): its *points* "
-        "(the layer, with its side information) and its *rebuild* (the Delaunay tetrahedralization, refined from "
-        "the coarser level's, then the reconstruction), each over the Delaunay base's wall-clock time. The columns "
-        "add up to the decode's ratio, less the file's reading and the process's start-up.")
+        "(wall-clock time between the decoder's progress calls): its *points* (the layer, with its side "
+        "information) and its *rebuild* (the Delaunay tetrahedralization, refined from the coarser level's, then "
+        "the reconstruction). Shares of the decode's own time (`decode_seconds`, which also holds reading the "
+        "file: *other*), medians over the runs of the bar; the last column is the coarser levels' rebuilds in "
+        "Delaunays, their share times the bar's ratio.")
     say("")
     say("| model | points, all levels | of which the base layer | rebuild, finest level | rebuild, coarser levels "
-        "| sum |")
-    say("|---|---:|---:|---:|---:|---:|")
+        "| other | decode / Delaunay (the bar) | coarser rebuilds / Delaunay |")
+    say("|---|---:|---:|---:|---:|---:|---:|---:|")
     shares = []
     for r in results:
-        base = r["t_del"]["wall"]
         ph = r["phases"]
-        pts = sum(p["points_seconds"] for p in ph) / base
-        first = ph[0]["points_seconds"] / base
-        fin = ph[-1]["rebuild_seconds"] / base
-        coarser = sum(p["rebuild_seconds"] for p in ph[:-1]) / base
-        shares.append((pts, first, fin, coarser))
-        say(f"| {r['name']} | {pts:.2f} | {first:.2f} | {fin:.2f} | {coarser:.2f} | {pts + fin + coarser:.2f} |")
-    g = [statistics.geometric_mean(x[i] for x in shares) for i in range(4)]
-    say(f"| **geometric mean** | {g[0]:.2f} | {g[1]:.2f} | {g[2]:.2f} | {g[3]:.2f} | |")
+        pts = sum(p["points_seconds"] for p in ph)
+        first = ph[0]["points_seconds"]
+        fin = ph[-1]["rebuild_seconds"]
+        coarser = sum(p["rebuild_seconds"] for p in ph[:-1])
+        other = max(0.0, 1 - pts - fin - coarser)
+        shares.append((pts, first, fin, coarser, coarser * r["r_dec"]))
+        pc = lambda x: f"{100 * x:.0f} %"
+        say(f"| {r['name']} | {pc(pts)} | {pc(first)} | {pc(fin)} | {pc(coarser)} | {pc(other)} | {r['r_dec']:.2f} | "
+            f"{coarser * r['r_dec']:.2f} |")
+    g = [statistics.geometric_mean(x[i] for x in shares) for i in range(5)]
+    say(f"| **geometric mean** | {100 * g[0]:.0f} % | {100 * g[1]:.0f} % | {100 * g[2]:.0f} % | {100 * g[3]:.0f} % | | "
+        f"{gm('r_dec'):.2f} | {g[4]:.2f} |")
     say("")
 
     # 4. Raw times.
