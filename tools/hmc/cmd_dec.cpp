@@ -109,14 +109,16 @@ int cmd_dec(int argc, char** argv) {
   // Progress on a terminal only: scripts reading stderr get no noise. The
   // progress calls are also timed, for --json's per-level phases.
   const bool tty = isatty(fileno(stderr)) != 0;
+  // The callback must not throw, so it never allocates: room for two calls
+  // per level of the most levels a stream may have (spec: 64).
   std::vector<Phase> phases;
+  phases.reserve(128);
   opt.progress = [tty, &phases](int level, bool rebuilding) {
-    phases.push_back({level, rebuilding, std::chrono::steady_clock::now()});
+    if (phases.size() < phases.capacity()) phases.push_back({level, rebuilding, std::chrono::steady_clock::now()});
     if (!tty) return;
     std::fprintf(stderr, "\rhmc: decoding, level %d, %-12s", level, rebuilding ? "rebuilding" : "points");
     std::fflush(stderr);
   };
-  phases.reserve(130);  // two per level: no allocation inside the decode, as a rule
   const auto t0 = std::chrono::steady_clock::now();
   auto bytes = io::read_file(in, opt.limits.max_bytes);
   if (!bytes) return report("cannot read " + in, bytes.error(), Stage::input);
