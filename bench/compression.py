@@ -742,9 +742,11 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         pc = lambda x: f"{100 * x:.0f} %"
         say(f"| {r['name']} | {pc(pts)} | {pc(first)} | {pc(fin)} | {pc(coarser)} | {pc(other)} | {r['r_dec']:.2f} | "
             f"{coarser * r['r_dec']:.2f} |")
-    g = [statistics.geometric_mean(x[i] for x in shares) for i in range(5)]
-    say(f"| **geometric mean** | {100 * g[0]:.0f} % | {100 * g[1]:.0f} % | {100 * g[2]:.0f} % | {100 * g[3]:.0f} % | | "
-        f"{gm('r_dec'):.2f} | {g[4]:.2f} |")
+    # A model of one level has no coarser rebuilds: no geometric mean then.
+    g = [statistics.geometric_mean(v) if min(v) > 0 else None for v in ([x[i] for x in shares] for i in range(5))]
+    gpc = lambda x: "–" if x is None else f"{100 * x:.0f} %"
+    say(f"| **geometric mean** | {gpc(g[0])} | {gpc(g[1])} | {gpc(g[2])} | {gpc(g[3])} | | {gm('r_dec'):.2f} | "
+        f"{f2(g[4])} |")
     say("")
 
     # 4. Raw times.
