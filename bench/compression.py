@@ -731,6 +731,7 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         "| other | decode / Delaunay (the bar) | coarser rebuilds / Delaunay |")
     say("|---|---:|---:|---:|---:|---:|---:|---:|")
     shares = []
+    pc = lambda x: "–" if x is None else f"{100 * x:.0f} %"
     for r in results:
         ph = r["phases"]
         pts = sum(p["points_seconds"] for p in ph)
@@ -739,13 +740,11 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         coarser = sum(p["rebuild_seconds"] for p in ph[:-1])
         other = max(0.0, 1 - pts - fin - coarser)
         shares.append((pts, first, fin, coarser, coarser * r["r_dec"]))
-        pc = lambda x: f"{100 * x:.0f} %"
         say(f"| {r['name']} | {pc(pts)} | {pc(first)} | {pc(fin)} | {pc(coarser)} | {pc(other)} | {r['r_dec']:.2f} | "
             f"{coarser * r['r_dec']:.2f} |")
     # A model of one level has no coarser rebuilds: no geometric mean then.
     g = [statistics.geometric_mean(v) if min(v) > 0 else None for v in ([x[i] for x in shares] for i in range(5))]
-    gpc = lambda x: "–" if x is None else f"{100 * x:.0f} %"
-    say(f"| **geometric mean** | {gpc(g[0])} | {gpc(g[1])} | {gpc(g[2])} | {gpc(g[3])} | | {gm('r_dec'):.2f} | "
+    say(f"| **geometric mean** | {pc(g[0])} | {pc(g[1])} | {pc(g[2])} | {pc(g[3])} | | {gm('r_dec'):.2f} | "
         f"{f2(g[4])} |")
     say("")
 

@@ -127,7 +127,6 @@ int cmd_dec(int argc, char** argv) {
   if (tty) std::fprintf(stderr, "\r%45s\r", "");
   if (!dec) return report(in, dec.error(), Stage::input);
   const auto t1 = std::chrono::steady_clock::now();
-  const auto phase_seconds = seconds_by_phase(phases, t1);
   const Decoded& d = dec.value();
   if (!d.warning.empty()) std::fprintf(stderr, "hmc: warning: %s: %s\n", in.c_str(), d.warning.c_str());
   const auto declared = static_cast<int>(d.declared_points.size());
@@ -189,6 +188,7 @@ int cmd_dec(int argc, char** argv) {
     if (!d.warning.empty()) j.key("warning").value(d.warning);
     j.key("decode_seconds").value(secs);
     j.key("levels").begin_array();
+    const auto phase_seconds = seconds_by_phase(phases, t1);
     for (const auto& l : d.levels) {
       j.begin_object();
       j.key("level").value(l.lod).key("points").value(static_cast<std::uint64_t>(l.points.size()));
