@@ -621,6 +621,59 @@ TEST_CASE("limits: finest level alone on two threads, coarser levels tetrahedral
   CHECK(failed == 2);
 }
 
+TEST_CASE("limits: every level rebuilt on two threads, refinement layers decoded ahead") {
+  // With two threads and every level rebuilt, a helper decodes the
+  // refinement layers' points ahead once the base layer is decoded, their
+  // bytes counted against max_memory until the main thread takes them. At
+  // every limit around the smallest that one thread decodes with, two
+  // threads must decode the same levels wherever one does (they may decode
+  // where one fails, codec.hpp, DecodeOptions::threads, never the reverse)
+  // and fail with the same status otherwise (the room a tetrahedralization
+  // gets, which the message quotes, may differ while a reconstruction in
+  // flight still holds the coarser level's). Counting the layers ahead
+  // against the limit makes two threads fail at the smallest limit one
+  // thread decodes with.
+  EncodeOptions eo;
+  eo.levels = 4;
+  const auto e = encode(samples::torus(48, 20), eo);
+  REQUIRE(e.ok());
+  const auto& b = e.value().bytes;
+  auto run = [&](std::uint64_t max_memory, unsigned threads) {
+    DecodeOptions o;
+    o.limits.max_memory = max_memory;
+    o.threads = threads;
+    return decode(b.data(), b.size(), o);
+  };
+  std::uint64_t lo = 1, hi = 64u << 20;  // fails at lo, decodes at hi
+  REQUIRE(!run(lo, 1).ok());
+  REQUIRE(run(hi, 1).ok());
+  while (hi - lo > 1) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    (run(mid, 1).ok() ? hi : lo) = mid;
+  }
+  const auto ref = run(hi, 1).value();
+  REQUIRE(ref.levels.size() == 4);
+  std::size_t failed = 0;
+  for (std::uint64_t m : {lo / 2, lo - 1000, lo, hi, hi + 1000, hi + 10000, hi + 100000, std::uint64_t{2} << 20,
+                          std::uint64_t{64} << 20}) {
+    CAPTURE(m);
+    const auto a = run(m, 1);
+    const auto t = run(m, 2);
+    if (!a.ok()) {
+      ++failed;
+      if (!t.ok()) CHECK(t.error().status == a.error().status);
+      continue;
+    }
+    REQUIRE(t.ok());
+    REQUIRE(t.value().levels.size() == 4);
+    for (std::size_t i = 0; i < 4; ++i) {
+      CHECK(t.value().levels[i].points == ref.levels[i].points);
+      CHECK(t.value().levels[i].triangles == ref.levels[i].triangles);
+    }
+  }
+  CHECK(failed == 3);
+}
+
 TEST_CASE("inspect lists chunks and levels without decoding layers") {
   auto e = encode(samples::torus(30, 12)).value();
   auto i = inspect(e.bytes.data(), e.bytes.size());

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include <algorithm>
 #include <chrono>
+#include <deque>
 #include <exception>
 #include <future>
 #include <memory>
@@ -131,6 +132,24 @@ constexpr std::uint64_t kPointBytes = 32;
 constexpr std::uint64_t kTetBytes = 160;
 constexpr std::uint64_t kSimplexBytes = 16;
 
+// The n points that refinement layer `c` adds to `coarse`, decoded by the
+// coder its first byte names.
+std::vector<GridPoint> decode_layer(const ChunkView& c, int q, const std::vector<GridPoint>& coarse, std::uint64_t n,
+                                    TableForm tables, const VectorQuantizer* vq) {
+  if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
+  const auto coder = static_cast<RefineCoder>(c.payload[0]);
+  if (coder == RefineCoder::conditional_octree || coder == RefineCoder::conditional_octree_planes ||
+      coder == RefineCoder::conditional_octree_gap || coder == RefineCoder::conditional_octree_depth_gaps ||
+      coder == RefineCoder::conditional_octree_quadric || coder == RefineCoder::conditional_octree_paired ||
+      coder == RefineCoder::conditional_octree_far)
+    return decode_refinement(c.payload + 1, c.length - 1, q, coarse, n, tables, static_cast<OctreeCoder>(coder));
+  if (coder == RefineCoder::anchored_vq) {
+    if (!vq) fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");
+    return decode_vq_layer(c.payload + 1, c.length - 1, q, coarse, *vq, n, tables);
+  }
+  fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
+}
+
 std::string truncation_warning(const ContainerView& view, const ChunkWalker& walk) {
   std::string why = view.truncated ? view.truncation : "the stream ends before HEND";
   return why + "; decoded " + std::to_string(walk.complete()) + " of " +
@@ -245,9 +264,49 @@ struct ChunkDecoder::State {
     return Early{a.lod, std::move(a.points), std::move(*dt)};
   }
 
+  // DecodeOptions::threads > 1 with rebuild_coarser_levels, in decode(),
+  // which holds the whole stream (set_chunks()): once the base layer's
+  // points are decoded, the helper decodes the refinement layers' points,
+  // one after the other (a layer needs only the coarser level's points),
+  // while this thread tetrahedralizes the coarser levels; the helper then
+  // takes their reconstructions. Each layer's points, or its error, wait in
+  // a slot until this thread meets the layer's chunk, in stream order, and
+  // takes them there (a chunk other than the slot's, which only a malformed
+  // stream has, drops the slots and is decoded here), so the output and the
+  // errors are those of a sequential decode. The slots are not counted in
+  // `memory`, so that every decision on the limit (the room a
+  // tetrahedralization is given, which its error message quotes; whether a
+  // tetrahedralization is kept) is the sequential one: the helper starts
+  // only where `memory`, the slots' levels at kPointBytes per point and the
+  // finest of them at 8 tetrahedra per point fit in the limit together.
+  const std::vector<ChunkView>* chunks = nullptr;
+  struct LayerSlot {
+    const std::uint8_t* payload;  // the chunk's
+    std::future<std::optional<std::vector<GridPoint>>> added;  // nullopt: not decoded ahead
+  };
+  std::deque<LayerSlot> slots;  // in stream order
+  std::future<void> prefetch;   // the helper's job: ready once every slot is set
+  void layers_ahead(const std::vector<GridPoint>& base, const ChunkView& base_chunk);
+  // The slot of layer chunk `c` (an invalid future when there is none).
+  std::future<std::optional<std::vector<GridPoint>>> take_layer(const ChunkView& c) {
+    if (slots.empty()) return {};
+    if (slots.front().payload != c.payload) {
+      drop_layers();
+      return {};
+    }
+    LayerSlot slot = std::move(slots.front());
+    slots.pop_front();
+    return std::move(slot.added);
+  }
+  void drop_layers() {
+    if (prefetch.valid()) prefetch.wait();
+    slots.clear();
+  }
+
   ~State() {
     if (in_flight) in_flight->result.wait();
     if (ahead) ahead->dt.wait();
+    if (prefetch.valid()) prefetch.wait();
   }
 
   // Fails with limit_exceeded unless `bytes` more fit in the memory limit.
@@ -277,50 +336,68 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
   std::shared_ptr<Tetrahedralization> coarse = std::move(previous_dt);
   previous_dt.reset();
   // A reconstruction in flight still reads `coarse`: its bytes stay counted
-  // until it is joined.
+  // until it is joined. Where that would fail this level, it is waited for
+  // (settle()), which leaves the accounting a sequential decode has here.
   const std::uint64_t coarse_bytes = previous_dt_bytes;
   previous_dt_bytes = 0;
+  bool coarse_counted = true;
+  auto settle = [&] {
+    join();
+    if (coarse_counted) memory -= coarse_bytes, coarse_counted = false;
+  };
   if (in_flight && in_flight->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) join();
-  if (!in_flight) memory -= coarse_bytes;
+  if (!in_flight) settle();
   // A speculative tetrahedralization leaves the accounting first, so that
   // the room is the one a sequential decode has.
   std::optional<Early> early = take_ahead();
+  const std::uint64_t max = options.limits.max_memory;
+  if (in_flight && (n * kPointBytes > max || memory > max - n * kPointBytes)) settle();
   reserve(n * kPointBytes, what);
-  const std::uint64_t room = options.limits.max_memory - memory - n * kPointBytes;
   // The previous level is the coarser one, and its points a subset; so are
   // those of a speculative tetrahedralization of a coarser level. A helper
   // not busy with a reconstruction in flight takes half of the verification.
   HelperBudget* spare = overlap ? &helpers : nullptr;
-  Tetrahedralization dt;
-  if (early) {
-    coarse.reset();
-    // Insertions into it may fail where building from scratch does not
-    // (the limit bounds the cells alive at any moment, and the two ways
-    // pass through different ones): any failure falls back to that, whose
-    // outcome is the sequential one.
-    try {
-      if (early->lod == level.lod) dt = std::move(early->dt);
-      else dt = delaunay_refine(level.points, *early->points, std::move(early->dt), room / kTetBytes, spare);
-    } catch (...) {
-      early.reset();
-      dt = delaunay(level.points, room / kTetBytes, spare);
+  auto build = [&]() -> Tetrahedralization {
+    const std::uint64_t room = max - memory - n * kPointBytes;
+    if (early) {
+      coarse.reset();
+      // Insertions into it may fail where building from scratch does not
+      // (the limit bounds the cells alive at any moment, and the two ways
+      // pass through different ones): any failure falls back to that, whose
+      // outcome is the sequential one.
+      std::optional<Tetrahedralization> got;
+      {
+        Early e = std::move(*early);
+        early.reset();
+        try {
+          if (e.lod == level.lod) got = std::move(e.dt);
+          else got = delaunay_refine(level.points, *e.points, std::move(e.dt), room / kTetBytes, spare);
+        } catch (...) {
+        }
+      }  // released before the fallback
+      if (got) return std::move(*got);
+      return delaunay(level.points, room / kTetBytes, spare);
     }
-    early.reset();
-  } else if (coarse && coarser && coarser->lod == level.lod + 1) {
-    // Handed over, or copied while the reconstruction in flight reads it.
-    Tetrahedralization sub = in_flight ? *coarse : std::move(*coarse);
-    coarse.reset();
-    dt = delaunay_refine(level.points, coarser->points, std::move(sub), room / kTetBytes, spare);
-  } else {
-    coarse.reset();
-    dt = delaunay(level.points, room / kTetBytes, spare);
+    if (coarse && coarser && coarser->lod == level.lod + 1) {
+      // Handed over, or copied while the reconstruction in flight reads it.
+      Tetrahedralization sub = in_flight ? *coarse : std::move(*coarse);
+      return delaunay_refine(level.points, coarser->points, std::move(sub), room / kTetBytes, spare);
+    }
+    return delaunay(level.points, room / kTetBytes, spare);
+  };
+  Tetrahedralization dt;
+  try {
+    dt = build();
+  } catch (const StreamError& e) {
+    // Over the limit while the reconstruction in flight holds its bytes:
+    // again with the room of a sequential decode.
+    if (!in_flight || e.error().status != Status::limit_exceeded) throw;
+    settle();
+    dt = build();
   }
-  if (in_flight) {
-    join();
-    memory -= coarse_bytes;
-  }
+  coarse.reset();
+  settle();
   const std::uint64_t keep = dt.tets.size() * 2 * sizeof(dt.tets[0]);
-  const std::uint64_t max = options.limits.max_memory;
   auto shared = std::make_shared<Tetrahedralization>(std::move(dt));
   // The last level rebuilt (the requested one, or the last of a stream that
   // ends early) is reconstructed here, with the helper taking half of its
@@ -330,7 +407,10 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
     // The points are copied: the level moves into out.levels meanwhile.
     auto points = std::make_shared<const std::vector<GridPoint>>(level.points);
     std::shared_ptr<const Tetrahedralization> tets = shared;
-    // Without a thread to be had it is reconstructed here, as with one thread.
+    // Without a thread to be had it is reconstructed here, as with one
+    // thread. The points of the finer layers come first: they are the next
+    // levels' inputs, and the helper is free for this once they are done.
+    if (prefetch.valid()) prefetch.wait();
     auto f = helpers.try_run([points, tets, kind, params] { return reconstruct(*points, *tets, kind, params); });
     if (f.valid()) in_flight = InFlight{index, std::move(f)};
   }
@@ -340,6 +420,61 @@ void ChunkDecoder::State::rebuild(DecodedLevel& level, const ReconParams& params
     previous_dt_bytes = keep;
     memory += keep;
   }
+}
+
+void ChunkDecoder::State::layers_ahead(const std::vector<GridPoint>& base, const ChunkView& base_chunk) {
+  if (!chunks || !overlap || !options.reconstruct || !options.rebuild_coarser_levels) return;
+  const auto& counts = walk.header->points;
+  const auto levels = static_cast<int>(counts.size());
+  // The layer chunks after the base one, up to the requested level.
+  std::vector<ChunkView> layers;
+  auto it = std::find_if(chunks->begin(), chunks->end(), [&](const ChunkView& v) { return v.payload == base_chunk.payload; });
+  if (it == chunks->end()) return;
+  for (++it; it != chunks->end() && layers.size() + 1 < counts.size(); ++it) {
+    if (it->type != kRefinement) continue;
+    if (levels - 1 - static_cast<int>(layers.size() + 1) < options.finest_level) break;
+    layers.push_back(*it);
+  }
+  if (layers.empty()) return;
+  std::uint64_t bytes = 0;
+  for (std::size_t i = 0; i < layers.size(); ++i) bytes += counts[i + 1] * kPointBytes;
+  const std::uint64_t finest = counts[layers.size()] * (kPointBytes + 8 * kTetBytes);
+  const std::uint64_t max = options.limits.max_memory;
+  if (memory > max || bytes > max - memory || finest > max - memory - bytes) return;
+  std::vector<std::promise<std::optional<std::vector<GridPoint>>>> promises(layers.size());
+  std::deque<LayerSlot> made;
+  for (std::size_t i = 0; i < layers.size(); ++i)
+    made.push_back({layers[i].payload, promises[i].get_future()});
+  std::shared_ptr<const VectorQuantizer> vq;
+  if (out.vector_quantizer) vq = std::make_shared<const VectorQuantizer>(*out.vector_quantizer);
+  const int q = walk.quantizer->bits;
+  const TableForm tables = walk.header->tables;
+  std::vector<std::uint64_t> added_counts;
+  for (std::size_t i = 0; i < layers.size(); ++i) added_counts.push_back(counts[i + 1] - counts[i]);
+  auto job = [promises = std::move(promises), layers = std::move(layers), added_counts = std::move(added_counts),
+              coarse = base, vq, q, tables]() mutable {
+    std::size_t i = 0;
+    for (; i < promises.size(); ++i) {
+      try {
+        std::vector<GridPoint> added = decode_layer(layers[i], q, coarse, added_counts[i], tables, vq.get());
+        if (i + 1 < promises.size()) {
+          std::vector<GridPoint> finer(coarse.size() + added.size());
+          std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), finer.begin());
+          coarse.swap(finer);
+        }
+        promises[i].set_value(std::move(added));
+      } catch (...) {
+        promises[i].set_exception(std::current_exception());
+        ++i;
+        break;
+      }
+    }
+    for (; i < promises.size(); ++i) promises[i].set_value(std::nullopt);
+  };
+  auto f = helpers.try_run(std::move(job));
+  if (!f.valid()) return;
+  slots = std::move(made);
+  prefetch = std::move(f);
 }
 
 void ChunkDecoder::State::speculate(const DecodedLevel& level) {
@@ -409,27 +544,16 @@ bool ChunkDecoder::chunk_impl(const ChunkView& c) {
       if (k == 0) {
         level.points = decode_base(c.payload, c.length, walk.quantizer->bits, counts.front(), walk.header->tables,
                                    s_->overlap ? &s_->helpers : nullptr);
+        s_->layers_ahead(level.points, c);
       } else {
         const auto& coarse = previous_points;
-        const std::uint64_t n = counts[k] - counts[k - 1];
-        std::vector<GridPoint> added;
-        const auto coder = static_cast<RefineCoder>(c.payload[0]);
-        if (coder == RefineCoder::conditional_octree || coder == RefineCoder::conditional_octree_planes ||
-            coder == RefineCoder::conditional_octree_gap || coder == RefineCoder::conditional_octree_depth_gaps ||
-            coder == RefineCoder::conditional_octree_quadric || coder == RefineCoder::conditional_octree_paired ||
-            coder == RefineCoder::conditional_octree_far) {
-          added = decode_refinement(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, n, walk.header->tables,
-                                    static_cast<OctreeCoder>(coder));
-        } else if (coder == RefineCoder::anchored_vq) {
-          if (!out.vector_quantizer)
-            fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");
-          added = decode_vq_layer(c.payload + 1, c.length - 1, walk.quantizer->bits, coarse, *out.vector_quantizer, n,
-                                  walk.header->tables);
-        } else {
-          fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
-        }
-        level.points.resize(coarse.size() + added.size());
-        std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), level.points.begin());
+        auto ahead = s_->take_layer(c);  // the points decoded ahead, if any
+        std::optional<std::vector<GridPoint>> added = ahead.valid() ? ahead.get() : std::nullopt;
+        if (!added)
+          added = decode_layer(c, walk.quantizer->bits, coarse, counts[k] - counts[k - 1], walk.header->tables,
+                               out.vector_quantizer ? &*out.vector_quantizer : nullptr);
+        level.points.resize(coarse.size() + added->size());
+        std::merge(coarse.begin(), coarse.end(), added->begin(), added->end(), level.points.begin());
       }
       level.stream_bytes = c.offset + kChunkOverhead + c.length;
       // A copy for the next layer, when one may follow.
@@ -522,6 +646,7 @@ Decoded ChunkDecoder::take() {
   return std::move(s_->out);
 }
 void ChunkDecoder::set_overlap(bool on) { s_->overlap = on; }
+void ChunkDecoder::set_chunks(const std::vector<ChunkView>* chunks) { s_->chunks = chunks; }
 bool ChunkDecoder::header_ready() const { return s_->walk.header && s_->walk.quantizer; }
 bool ChunkDecoder::ended() const { return s_->walk.end_seen; }
 
@@ -532,6 +657,7 @@ Decoded decode_impl(const std::uint8_t* data, std::size_t size, const DecodeOpti
   const ContainerView view = parse_container(data, size, kEnd);
   ChunkDecoder decoder(options);
   decoder.set_overlap(options.threads > 1);
+  decoder.set_chunks(&view.chunks);
   decoder.set_version(view.major, view.minor);
   for (const ChunkView& c : view.chunks) decoder.chunk(c);
   decoder.finish(view);

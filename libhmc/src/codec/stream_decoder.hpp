@@ -74,6 +74,10 @@ class ChunkDecoder {
   /// then in place only after the next chunk() or finish(), so only the
   /// whole-buffer decode() turns it on; the default is off.
   void set_overlap(bool on);
+  /// Every chunk of the stream, in order, whose memory outlives the
+  /// decoder: with overlap, the refinement layers' points are then decoded
+  /// ahead on the second thread (decode() only).
+  void set_chunks(const std::vector<ChunkView>* chunks);
   /// HEAD and SQNT have been read (kind, quantizer and declared levels are known).
   bool header_ready() const;
   /// HEND has been read.
