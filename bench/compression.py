@@ -696,8 +696,9 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
         f"*finest only* decodes the {LEVELS}-level stream but rebuilds only its finest level (`hmc dec --rebuild "
         "finest`, what `hmc dec -o` does), the same mesh as the finest level of a full decode (checked); *two "
         "threads, wall* is the full decode's wall-clock time on two threads (`--threads 2`, the default where the "
-        "machine has two: each level's reconstruction overlaps the decoding of the next level's points and "
-        "tetrahedralization; the same levels, checked) over the Delaunay's wall-clock time.")
+        "machine has two: the second thread decodes the refinement layers' points while the first "
+        "tetrahedralizes the coarser levels, then reconstructs each level while the first tetrahedralizes the "
+        "next; the same levels, checked) over the Delaunay's wall-clock time.")
     say("")
     say(f"| model | decode / Delaunay (CPU) | wall | two threads, wall | Σ levels | finest only / Delaunay | "
         f"1-level decode / Delaunay | encode / Delaunay (CPU) | wall | points-only decode / Delaunay, {LEVELS} levels "
