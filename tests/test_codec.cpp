@@ -576,31 +576,44 @@ TEST_CASE("limits: working memory, including a tetrahedralization quadratic in i
   CHECK(r3.error().message.find("level 0 (600 points)") != std::string::npos);
 }
 
+// A 4-level torus stream and the smallest max_memory at which one thread
+// decodes it (hi; lo = hi - 1 fails), every level rebuilt or the finest
+// alone.
+struct LimitSweep {
+  explicit LimitSweep(bool every_level) : all(every_level) {
+    EncodeOptions eo;
+    eo.levels = 4;
+    auto e = encode(samples::torus(48, 20), eo);
+    REQUIRE(e.ok());
+    bytes = std::move(e.value().bytes);
+    REQUIRE(!run(lo, 1).ok());
+    REQUIRE(run(hi, 1).ok());
+    while (hi - lo > 1) {
+      const std::uint64_t mid = lo + (hi - lo) / 2;
+      (run(mid, 1).ok() ? hi : lo) = mid;
+    }
+  }
+  Result<Decoded> run(std::uint64_t max_memory, unsigned threads) const {
+    DecodeOptions o;
+    o.limits.max_memory = max_memory;
+    o.rebuild_coarser_levels = all;
+    o.threads = threads;
+    return decode(bytes.data(), bytes.size(), o);
+  }
+  bool all;
+  std::vector<std::uint8_t> bytes;
+  std::uint64_t lo = 1, hi = 64u << 20;
+};
+
 TEST_CASE("limits: finest level alone on two threads, coarser levels tetrahedralized ahead") {
   // With rebuild_coarser_levels off and two threads, a helper tetrahedralizes
   // the coarser levels while the finer levels' points decode, and the finest
   // level's tetrahedralization is refined from that. It is speculative: at
   // every memory limit the outcome must be that of one thread. The limits
   // tried are those around the smallest that one thread decodes with.
-  EncodeOptions eo;
-  eo.levels = 4;
-  const auto e = encode(samples::torus(48, 20), eo);
-  REQUIRE(e.ok());
-  const auto& b = e.value().bytes;
-  auto run = [&](std::uint64_t max_memory, unsigned threads) {
-    DecodeOptions o;
-    o.limits.max_memory = max_memory;
-    o.rebuild_coarser_levels = false;
-    o.threads = threads;
-    return decode(b.data(), b.size(), o);
-  };
-  std::uint64_t lo = 1, hi = 64u << 20;  // fails at lo, decodes at hi
-  REQUIRE(!run(lo, 1).ok());
-  REQUIRE(run(hi, 1).ok());
-  while (hi - lo > 1) {
-    const std::uint64_t mid = lo + (hi - lo) / 2;
-    (run(mid, 1).ok() ? hi : lo) = mid;
-  }
+  const LimitSweep sweep(false);
+  const auto run = [&](std::uint64_t m, unsigned threads) { return sweep.run(m, threads); };
+  const std::uint64_t lo = sweep.lo, hi = sweep.hi;
   const auto ref = run(hi, 1).value();
   REQUIRE(ref.levels.size() == 4);
   REQUIRE_FALSE(ref.finest().triangles.empty());
@@ -623,34 +636,20 @@ TEST_CASE("limits: finest level alone on two threads, coarser levels tetrahedral
 
 TEST_CASE("limits: every level rebuilt on two threads, refinement layers decoded ahead") {
   // With two threads and every level rebuilt, a helper decodes the
-  // refinement layers' points ahead once the base layer is decoded, their
-  // bytes counted against max_memory until the main thread takes them. At
-  // every limit around the smallest that one thread decodes with, two
-  // threads must decode the same levels wherever one does (they may decode
-  // where one fails, codec.hpp, DecodeOptions::threads, never the reverse)
-  // and fail with the same status otherwise (the room a tetrahedralization
-  // gets, which the message quotes, may differ while a reconstruction in
-  // flight still holds the coarser level's). Counting the layers ahead
-  // against the limit makes two threads fail at the smallest limit one
-  // thread decodes with.
-  EncodeOptions eo;
-  eo.levels = 4;
-  const auto e = encode(samples::torus(48, 20), eo);
-  REQUIRE(e.ok());
-  const auto& b = e.value().bytes;
-  auto run = [&](std::uint64_t max_memory, unsigned threads) {
-    DecodeOptions o;
-    o.limits.max_memory = max_memory;
-    o.threads = threads;
-    return decode(b.data(), b.size(), o);
-  };
-  std::uint64_t lo = 1, hi = 64u << 20;  // fails at lo, decodes at hi
-  REQUIRE(!run(lo, 1).ok());
-  REQUIRE(run(hi, 1).ok());
-  while (hi - lo > 1) {
-    const std::uint64_t mid = lo + (hi - lo) / 2;
-    (run(mid, 1).ok() ? hi : lo) = mid;
-  }
+  // refinement layers' points ahead once the base layer is decoded (where
+  // the limit leaves room for them beside the finest level's
+  // tetrahedralization), and reconstructs each level while the next one is
+  // tetrahedralized. At every limit around the smallest that one thread
+  // decodes with, two threads must decode the same levels wherever one does
+  // (they may decode where one fails, codec.hpp, DecodeOptions::threads,
+  // never the reverse) and fail with the same status otherwise (the room a
+  // tetrahedralization gets, which the message quotes, may differ while a
+  // reconstruction in flight still holds the coarser level's). Before a
+  // reconstruction in flight was waited for where its bytes decide, two
+  // threads failed at some limits that one decodes with.
+  const LimitSweep sweep(true);
+  const auto run = [&](std::uint64_t m, unsigned threads) { return sweep.run(m, threads); };
+  const std::uint64_t lo = sweep.lo, hi = sweep.hi;
   const auto ref = run(hi, 1).value();
   REQUIRE(ref.levels.size() == 4);
   std::size_t failed = 0;
