@@ -1173,65 +1173,156 @@ TEST_CASE("winding numbers: exact near the triangles, 1 inside and 0 outside a c
   for (double r : {1.01, 1.03, 1.2, 3.0, 50.0}) CHECK(std::abs(ws({r * 0.6, r * 0.48, r * 0.64})) < 0.025);
 }
 
-TEST_CASE("truth labels: winding numbers carried to a coarser level give the same labels") {
-  // A torus on the grid, its surface at the same points; the coarser level
-  // keeps two points in three.
-  const Mesh m = samples::torus(40, 16);
-  std::vector<GridPoint> fine;
-  std::vector<Vec3> surface_points;
-  for (const auto& p : m.points) {
-    GridPoint g;
-    for (int a = 0; a < 3; ++a) g[a] = static_cast<std::uint32_t>(std::lround(500 + 300 * p[a]));
-    fine.push_back(g);
-    surface_points.push_back({double(g[0]), double(g[1]), double(g[2])});
+namespace {
+
+// A torus on the grid (500 + 300·p), its points and their grid positions.
+struct GridTorus {
+  Mesh mesh;
+  std::vector<GridPoint> points;      // in the mesh's order
+  std::vector<Vec3> surface_points;   // the same, as Vec3
+};
+GridTorus grid_torus(int nu, int nv) {
+  GridTorus g{samples::torus(nu, nv), {}, {}};
+  for (const auto& p : g.mesh.points) {
+    GridPoint q;
+    for (int a = 0; a < 3; ++a) q[a] = static_cast<std::uint32_t>(std::lround(500 + 300 * p[a]));
+    g.points.push_back(q);
+    g.surface_points.push_back({double(q[0]), double(q[1]), double(q[2])});
   }
-  std::vector<GridPoint> coarse;
+  return g;
+}
+
+}  // namespace
+
+TEST_CASE("closed surface: exact jumps of the winding number along segments, caps for an open one") {
+  const GridTorus g = grid_torus(40, 16);
+  REQUIRE(ClosedSurface::exact(g.surface_points));
+  CHECK_FALSE(ClosedSurface::exact({{0.5, 1, 2}}));
+  CHECK_FALSE(ClosedSurface::exact({{-1, 1, 2}}));
+  CHECK_FALSE(ClosedSurface::exact({{4194304, 1, 2}}));
+  const ClosedSurface closed(g.surface_points, g.mesh.triangles);
+  CHECK(closed.caps().empty());  // a torus is closed
+  const WindingNumber wn(g.surface_points, g.mesh.triangles);
+  // Random points on the quarter grid: every jump that is not degenerate is
+  // the difference of the summed winding numbers, which are 0 or ±1 here
+  // (the sign is the torus' orientation).
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<std::int64_t> coord(4 * 100, 4 * 900);
+  auto grid = [](const ClosedSurface::Point& p) {
+    return Vec3{static_cast<double>(p[0]) / 4, static_cast<double>(p[1]) / 4, static_cast<double>(p[2]) / 4};
+  };
+  int nonzero = 0, degenerate = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const ClosedSurface::Point p{coord(rng), coord(rng), coord(rng)}, q{coord(rng), coord(rng), coord(rng)};
+    const auto j = closed.jump(p, q);
+    if (!j) {
+      ++degenerate;
+      continue;
+    }
+    CHECK(*j == std::lround(wn(grid(q)) - wn(grid(p))));
+    nonzero += *j != 0;
+    if (i % 10 == 0) CHECK(closed.jump(closed.outside(i % 4), p) == std::lround(wn(grid(p))));
+  }
+  CHECK(nonzero > 300);
+  CHECK(degenerate < 30);
+  // A segment through a vertex, or with an end on a triangle (its centroid
+  // when that is on the quarter grid), is degenerate; one that stays away
+  // from the surface jumps by 0.
+  const auto& t0 = g.mesh.triangles[0];
+  const ClosedSurface::Point centre{4 * 500, 4 * 500, 4 * 500};  // in the torus' hole
+  ClosedSurface::Point beyond, sum{0, 0, 0};
+  for (int a = 0; a < 3; ++a) {
+    beyond[a] = 2 * 4 * static_cast<std::int64_t>(g.points[t0[0]][a]) - centre[a];  // the vertex halfway
+    for (auto k : t0) sum[a] += 4 * static_cast<std::int64_t>(g.points[k][a]);
+  }
+  CHECK_FALSE(closed.jump(centre, beyond).has_value());
+  if (sum[0] % 3 == 0 && sum[1] % 3 == 0 && sum[2] % 3 == 0)
+    CHECK_FALSE(closed.jump(closed.outside(0), {sum[0] / 3, sum[1] / 3, sum[2] / 3}).has_value());
+  CHECK(closed.jump(centre, {centre[0] + 8, centre[1] + 4, centre[2]}) == 0);
+
+  // Half the torus: open, its border two circles, each closed by a cap of
+  // its own. The surface's winding number is the closed one's less the caps'.
+  Mesh half = g.mesh;
+  half.triangles.clear();
+  for (const auto& t : g.mesh.triangles)
+    if (g.surface_points[t[0]][0] < 500 && g.surface_points[t[1]][0] < 500 && g.surface_points[t[2]][0] < 500)
+      half.triangles.push_back(t);
+  REQUIRE(half.triangles.size() < g.mesh.triangles.size());
+  const ClosedSurface open(g.surface_points, half.triangles);
+  REQUIRE_FALSE(open.caps().empty());
+  std::set<std::uint32_t> apexes;
+  for (const auto& c : open.caps()) apexes.insert(c[0]);
+  CHECK(apexes.size() == 2);
+  const WindingNumber half_wn(g.surface_points, half.triangles), caps_wn(open.cap_points(), open.caps());
+  int counted = 0;
+  for (int i = 0; i < 500; ++i) {
+    const ClosedSurface::Point p{coord(rng), coord(rng), coord(rng)};
+    const auto j = open.jump(open.outside(0), p);
+    if (!j) continue;
+    ++counted;
+    CHECK(std::abs(*j - caps_wn(grid(p)) - half_wn(grid(p))) < 0.06);
+  }
+  CHECK(counted > 490);
+}
+
+TEST_CASE("truth labels: the winding numbers the walk counts, for a closed and an open surface") {
+  const GridTorus g = grid_torus(40, 16);
+  std::vector<GridPoint> fine = g.points, coarse;
   for (std::size_t i = 0; i < fine.size(); ++i)
     if (i % 3 != 0) coarse.push_back(fine[i]);
   std::sort(fine.begin(), fine.end());
   std::sort(coarse.begin(), coarse.end());
   const auto dt_fine = delaunay(fine), dt_coarse = delaunay(coarse);
   const std::vector<Triangle> no_faces;
-
+  Mesh half = g.mesh;
+  half.triangles.clear();
+  for (const auto& t : g.mesh.triangles)
+    if (g.surface_points[t[0]][0] < 500 || g.surface_points[t[1]][0] < 500 || g.surface_points[t[2]][0] < 500)
+      half.triangles.push_back(t);
+  // Every label the plain sum leaves in no doubt (away from 1/4 .. 3/4) is
+  // the sum's; the rest are settled by neighbours.
+  auto check = [&](const std::vector<GridPoint>& pts, const Tetrahedralization& dt, const std::vector<Triangle>& surface,
+                   const std::vector<std::uint8_t>& labels) {
+    REQUIRE(labels.size() == dt.tets.size());
+    std::size_t sure = 0, inside = 0;
+    for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+      Vec3 c{0, 0, 0};
+      for (auto v : dt.tets[t])
+        for (int a = 0; a < 3; ++a) c[a] += 0.25 * pts[v][a];
+      const double w = std::abs(winding_number(g.surface_points, surface, c));
+      if (w > 0.25 && w < 0.75) continue;
+      ++sure;
+      inside += w > 0.5;
+      CHECK(labels[t] == (w > 0.5 ? 1 : 0));
+    }
+    CHECK(sure > dt.tets.size() * 9 / 10);
+    CHECK(inside > dt.tets.size() / 10);
+  };
   WindingCache cache;
-  const auto fine_labels = truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces, &cache);
-  CHECK(fine_labels == truth_labels(fine, dt_fine, surface_points, m.triangles, no_faces));
-  CHECK(cache.entries.size() == dt_fine.tets.size());
-  const WindingNumber* tree = cache.tree.get();  // built once for the surface
-  REQUIRE(tree != nullptr);
-  // Tetrahedra the coarser level keeps: the cache answers for them.
-  std::size_t kept = 0;
-  for (const auto& t : dt_coarse.tets) {
-    std::uint64_t key[3] = {0, 0, 0};
-    for (auto v : t)
-      for (int a = 0; a < 3; ++a) key[a] += coarse[v][a];
-    const std::uint64_t packed = key[0] << (2 * cache.field) | key[1] << cache.field | key[2];
-    kept += std::binary_search(cache.entries.begin(), cache.entries.end(), std::make_pair(packed, 0.0),
-                               [](const auto& x, const auto& y) { return x.first < y.first; });
-  }
-  CHECK(kept > dt_coarse.tets.size() / 10);
-  WindingCache spoiled = cache;
-  const auto plain = truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces);
-  CHECK(truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces, &cache) == plain);
-  CHECK(cache.tree.get() == tree);  // the same surface: the same tree
-  // The cache is read, not recomputed: wrong values give other labels.
-  for (auto& e : spoiled.entries) e.second = 1 - e.second;
-  CHECK(truth_labels(coarse, dt_coarse, surface_points, m.triangles, no_faces, &spoiled) != plain);
-
-  // Coordinates of 20 bits: three keys do not fit in 64 bits, so nothing is
-  // cached, and a cache of other keys is not read.
-  std::vector<GridPoint> big = fine;
-  std::vector<Vec3> big_surface = surface_points;
-  for (auto& g : big)
-    for (auto& c : g) c <<= 10;
-  for (auto& p : big_surface)
-    for (auto& c : p) c *= 1024;
-  const auto dt_big = delaunay(big);
-  WindingCache big_cache = cache;
-  CHECK(truth_labels(big, dt_big, big_surface, m.triangles, no_faces, &big_cache) ==
-        truth_labels(big, dt_big, big_surface, m.triangles, no_faces));
-  CHECK(big_cache.entries.empty());
-  CHECK(big_cache.tree.get() != tree);  // another surface: its own tree
+  const auto fine_labels = truth_labels(fine, dt_fine, g.surface_points, g.mesh.triangles, no_faces, &cache);
+  check(fine, dt_fine, g.mesh.triangles, fine_labels);
+  CHECK(fine_labels == truth_labels(fine, dt_fine, g.surface_points, g.mesh.triangles, no_faces));
+  const ClosedSurface* closed = cache.closed.get();  // built once for the surface
+  REQUIRE(closed != nullptr);
+  CHECK(cache.caps.get() == nullptr);
+  const auto coarse_labels = truth_labels(coarse, dt_coarse, g.surface_points, g.mesh.triangles, no_faces, &cache);
+  check(coarse, dt_coarse, g.mesh.triangles, coarse_labels);
+  CHECK(cache.closed.get() == closed);  // the same surface: the same structure
+  // Another surface object: its own structures (the open half has caps).
+  WindingCache open_cache = cache;
+  const auto open_labels = truth_labels(fine, dt_fine, g.surface_points, half.triangles, no_faces, &open_cache);
+  check(fine, dt_fine, half.triangles, open_labels);
+  CHECK(open_cache.closed.get() != closed);
+  CHECK(open_cache.caps.get() != nullptr);
+  CHECK(open_labels != fine_labels);
+  // Points off the grid: the plain sums (through the tree), the same labels.
+  std::vector<Vec3> shifted = g.surface_points;
+  for (auto& p : shifted)
+    for (auto& c : p) c += 1.0 / 1024;
+  WindingCache off_grid;
+  CHECK(truth_labels(fine, dt_fine, shifted, g.mesh.triangles, no_faces, &off_grid) == fine_labels);
+  CHECK(off_grid.closed.get() == nullptr);
+  CHECK(off_grid.tree.get() != nullptr);
 }
 
 TEST_CASE("boundary faces of tetrahedra: the faces only one of them has, facing out") {

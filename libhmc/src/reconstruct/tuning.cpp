@@ -9,8 +9,6 @@
 #include "entropy/rice.hpp"
 #include "reconstruct/distance.hpp"
 #include "reconstruct/winding.hpp"
-#include "util/morton.hpp"
-#include "util/radix_sort.hpp"
 
 namespace hmc::detail {
 
@@ -326,78 +324,90 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
                                        const std::vector<Triangle>& input_faces_on_points, WindingCache* cache,
                                        bool sheet, double* unsure) {
   const std::size_t nt = dt.tets.size();
-  // The tree of an earlier call on the same surface (the input's, level
-  // after level) is the same tree.
-  std::shared_ptr<const WindingNumber> tree;
-  if (cache && cache->tree_points == &surface_points && cache->tree_surface == &surface) tree = cache->tree;
-  if (!tree) tree = std::make_shared<const WindingNumber>(surface_points, surface);
-  if (cache) cache->tree = tree, cache->tree_points = &surface_points, cache->tree_surface = &surface;
-  const WindingNumber& wn = *tree;
-  std::vector<double> w(nt);
-  // Tetrahedra in the Morton order of their first vertex (12 bits per
-  // axis): consecutive queries then open the same clusters of the winding
-  // tree, which stay in cache. Each value is computed alone, so the order
-  // changes nothing else.
-  std::uint32_t any = 0;
-  for (const auto& p : points) any |= p[0] | p[1] | p[2];
-  int shift = 0;
-  while ((any >> shift) >= (1u << 12)) ++shift;
-  constexpr int kIndexBits = 28;
-  const bool reorder = nt < (std::size_t{1} << kIndexBits);
-  std::vector<std::uint64_t> order(nt);
-  for (std::size_t t = 0; t < nt; ++t) {
-    const GridPoint& p = points[dt.tets[t][0]];
-    const std::uint64_t key = reorder ? morton_key({p[0] >> shift, p[1] >> shift, p[2] >> shift}, 12) : 0;
-    order[t] = key << kIndexBits | t;
+  // The structures of an earlier call on the same surface (the input's,
+  // level after level) are the same structures.
+  const bool same = cache && cache->points == &surface_points && cache->surface == &surface;
+  std::shared_ptr<const ClosedSurface> closed = same ? cache->closed : nullptr;
+  std::shared_ptr<const WindingNumber> tree = same ? cache->tree : nullptr, caps = same ? cache->caps : nullptr;
+  if (!closed && ClosedSurface::exact(surface_points)) {
+    closed = std::make_shared<const ClosedSurface>(surface_points, surface);
+    if (!closed->caps().empty()) caps = std::make_shared<const WindingNumber>(closed->cap_points(), closed->caps());
   }
-  if (reorder) radix_sort(order, 64);
-  // The key of a tetrahedron: four times its centroid, integers below
-  // 2^(b+2) for coordinates below 2^b, packed into 64 bits when three fit.
-  int b = 0;
-  while (b < 32 && (any >> b) != 0) ++b;
-  const int field = b + 2;
-  const bool use_cache = cache && 3 * field <= 64 && !sheet;
-  if (cache && cache->field != field) cache->entries.clear();  // keys packed otherwise
-  auto key_of = [&](std::size_t t) {
-    std::uint64_t sum[3] = {0, 0, 0};
-    for (auto v : dt.tets[t])
-      for (int a = 0; a < 3; ++a) sum[a] += points[v][a];
-    return sum[0] << (2 * field) | sum[1] << field | sum[2];
+  // The winding number of the surface summed over its triangles: where the
+  // closed surface's cannot be counted exactly, and for unexact points.
+  auto direct = [&](const Vec3& c) {
+    if (!tree) tree = std::make_shared<const WindingNumber>(surface_points, surface);
+    return (*tree)(c);
   };
-  using Entry = std::pair<std::uint64_t, double>;
-  const auto by_key = [](const Entry& e, std::uint64_t key) { return e.first < key; };
-  // Each value depends on its tetrahedron alone (and the cache, read only):
-  // with a helper thread free, it takes the second half of the order.
-  auto fill = [&](std::size_t from, std::size_t to) {
-    for (std::size_t i = from; i < to; ++i) {
-      const std::uint64_t k = order[i];
-      const std::size_t t = reorder ? static_cast<std::size_t>(k & ((std::uint64_t{1} << kIndexBits) - 1)) : static_cast<std::size_t>(k);
-      if (use_cache && !cache->entries.empty()) {
-        const std::uint64_t key = key_of(t);
-        const auto it = std::lower_bound(cache->entries.begin(), cache->entries.end(), key, by_key);
-        if (it != cache->entries.end() && it->first == key) {
-          w[t] = it->second;
-          continue;
+  std::vector<double> w(nt);
+  auto centroid = [&](std::size_t t) {
+    Vec3 c{0, 0, 0};
+    for (auto v : dt.tets[t])
+      for (int a = 0; a < 3; ++a) c[a] += 0.25 * points[v][a];
+    return c;
+  };
+  if (closed) {
+    // The closed surface's winding number W, an integer off it, counted
+    // from a point outside to one tetrahedron's centroid and from there
+    // across the faces to the neighbours' (breadth first); a tetrahedron
+    // that no such count reaches (its centroid on a triangle) gets the
+    // direct sum. Centroids in quarter units: four times, integers.
+    std::vector<ClosedSurface::Point> c4(nt);
+    for (std::size_t t = 0; t < nt; ++t) {
+      ClosedSurface::Point c{0, 0, 0};
+      for (auto v : dt.tets[t])
+        for (int a = 0; a < 3; ++a) c[a] += points[v][a];
+      c4[t] = c;
+    }
+    std::vector<int> winding(nt);
+    std::vector<std::uint8_t> state(nt, 0);  // 0 unknown, 1 counted, 2 summed
+    std::vector<std::uint32_t> queue, summed;
+    queue.reserve(nt);
+    for (std::size_t s = 0; s < nt; ++s) {
+      if (state[s] != 0) continue;
+      std::optional<int> from_outside;
+      for (int which = 0; which < 4 && !from_outside; ++which) from_outside = closed->jump(closed->outside(which), c4[s]);
+      if (!from_outside) {
+        state[s] = 2;
+        summed.push_back(static_cast<std::uint32_t>(s));
+        continue;
+      }
+      state[s] = 1;
+      winding[s] = *from_outside;
+      queue.assign(1, static_cast<std::uint32_t>(s));
+      for (std::size_t head = 0; head < queue.size(); ++head) {
+        const std::uint32_t t = queue[head];
+        for (std::uint32_t u : dt.neighbors[t]) {
+          if (u == kNoTet || state[u] != 0) continue;
+          if (const auto j = closed->jump(c4[t], c4[u])) {
+            state[u] = 1;
+            winding[u] = winding[t] + *j;
+            queue.push_back(u);
+          }
         }
       }
-      Vec3 c{0, 0, 0};
-      for (auto v : dt.tets[t])
-        for (int a = 0; a < 3; ++a) c[a] += 0.25 * points[v][a];
-      w[t] = sheet ? wn(c) : std::abs(wn(c));
     }
-  };
-  std::future<void> other;
-  if (cache && cache->helpers && nt >= 1024) other = cache->helpers->try_run([&] { fill(nt / 2, nt); });
-  fill(0, other.valid() ? nt / 2 : nt);
-  if (other.valid()) other.get();
-  if (cache && !sheet) {
-    std::vector<Entry>().swap(cache->entries);  // this level's replace the previous level's
-    cache->field = field;
-    if (use_cache) {
-      cache->entries.resize(nt);
-      for (std::size_t t = 0; t < nt; ++t) cache->entries[t] = {key_of(t), w[t]};
-      std::sort(cache->entries.begin(), cache->entries.end());
-    }
+    // Building the tree costs about as much as 50 plain sums over the
+    // surface's triangles (the horse: 2 centroids of 329,502 need either).
+    constexpr std::size_t kPlainSums = 32;
+    for (std::uint32_t t : summed)
+      w[t] = tree || summed.size() > kPlainSums ? direct(centroid(t)) : winding_number(surface_points, surface, centroid(t));
+    // The surface's own: W less the caps' (an open surface's).
+    split_range(cache ? cache->helpers : nullptr, nt, 1024, [&](std::size_t from, std::size_t to) {
+      for (std::size_t t = from; t < to; ++t)
+        if (state[t] == 1) w[t] = winding[t] - (caps ? (*caps)(centroid(t)) : 0.0);
+    });
+  } else {
+    for (std::size_t t = 0; t < nt; ++t) w[t] = direct(centroid(t));
+  }
+  if (!sheet)
+    for (auto& v : w) v = std::abs(v);
+  if (cache) {
+    cache->points = &surface_points;
+    cache->surface = &surface;
+    cache->closed = closed;
+    cache->tree = tree;
+    cache->caps = caps;
   }
   std::vector<std::uint8_t> label(nt);
   std::vector<std::uint8_t> sure(nt);

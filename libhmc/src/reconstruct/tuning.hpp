@@ -16,6 +16,7 @@
 namespace hmc::detail {
 
 class WindingNumber;
+class ClosedSurface;
 
 /// The input's connectivity on the quantization grid: indices into the
 /// level's canonical points. Degenerate elements (merged vertices) dropped.
@@ -31,33 +32,31 @@ struct GridMesh {
 /// faces. `surface` is evaluated at `surface_points` (grid units), which may
 /// be a finer level's points than the tetrahedralized ones.
 ///
-/// `cache`, when given, carries winding numbers from one call to the next
-/// for the same surface: a tetrahedron's centroid, hence its winding
-/// number, depends only on its four points, and a coarser level keeps many
-/// of a finer level's tetrahedra (38-69 % on the Stanford bunny and
-/// hand_tetgen at 4 levels). It must not be shared between calls with
-/// different surfaces.
+/// With integer surface points (ClosedSurface::exact) the winding number
+/// is that of the surface closed by caps, counted exactly along a walk
+/// through the tetrahedra, less the caps' own (ClosedSurface); the sum over
+/// the surface's triangles (WindingNumber) is only taken at centroids that
+/// lie on a triangle. On the shared models at q = 12 the labels are those
+/// of the plain sum at every centroid.
+///
+/// `cache`, when given, carries the structures built for the surface from
+/// one call to the next with the same `surface_points` and `surface`
+/// objects (they refer to the points, which must outlive the cache).
 struct WindingCache {
-  /// Bits per axis of the packed keys: 2 more than the coordinates need.
-  int field = 0;
-  /// (4 × centroid in grid units, x·2^(2·field) + y·2^field + z;
-  /// |winding number|), sorted by key. Empty when three fields do not fit
-  /// in 64 bits (coordinates of 20 bits and more).
-  std::vector<std::pair<std::uint64_t, double>> entries;
-  /// The winding-number tree of the surface, built by the first call and
-  /// used by the next ones with the same `surface_points` and `surface`
-  /// objects (it refers to the points, which must outlive the cache).
-  std::shared_ptr<const WindingNumber> tree;
-  const std::vector<Vec3>* tree_points = nullptr;
-  const std::vector<Triangle>* tree_surface = nullptr;
-  /// Helper threads (EncodeOptions::threads): with one free, the winding
-  /// numbers are computed in two halves at once; the values are the same.
+  const std::vector<Vec3>* points = nullptr;
+  const std::vector<Triangle>* surface = nullptr;
+  std::shared_ptr<const ClosedSurface> closed;  ///< when the points are exact
+  std::shared_ptr<const WindingNumber> tree;    ///< the surface's, once needed
+  std::shared_ptr<const WindingNumber> caps;    ///< the caps', when there are caps
+  /// Helper threads (EncodeOptions::threads): with one free, the caps'
+  /// winding numbers are computed in two halves at once; the values are the
+  /// same.
   HelperBudget* helpers = nullptr;
 };
 /// truth_labels(), described above WindingCache. `sheet`: read the surface as an open sheet, whose two sides have
 /// winding numbers near +1/2 and -1/2 (their magnitudes do not tell them
 /// apart): inside is where the winding number, signed by the surface's
-/// prevailing orientation, exceeds 1/10. Signed values are not cached.
+/// prevailing orientation, exceeds 1/10.
 /// `unsure`, when given, receives the share of tetrahedra whose label the
 /// winding number alone leaves open (settled by their neighbours).
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,

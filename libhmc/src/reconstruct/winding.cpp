@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
+#include "delaunay/predicates.hpp"
 #include "util/single_faces.hpp"
 
 namespace hmc::detail {
@@ -201,6 +203,192 @@ double WindingNumber::query(std::uint32_t id, const Vec3& q) const {
 double WindingNumber::operator()(const Vec3& q) const {
   if (tri_.empty()) return 0;
   return query(1, q) / (4 * kPi);
+}
+
+namespace {
+
+constexpr std::uint32_t kBoxLeaf = 4;
+constexpr double kQuarterLimit = 4194304.0;  // 2^22 grid units
+
+// det [u; v; w] for entries below 2^26 in magnitude: the minors stay below
+// 2^53, the result below 2^80.
+Int128 det(const ClosedSurface::Point& u, const ClosedSurface::Point& v, const ClosedSurface::Point& w) {
+  return det3({u[0], u[1], u[2]}, {v[0], v[1], v[2]}, {w[0], w[1], w[2]});
+}
+
+ClosedSurface::Point minus(const ClosedSurface::Point& a, const std::array<std::int32_t, 3>& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+
+}  // namespace
+
+bool ClosedSurface::exact(const std::vector<Vec3>& points) {
+  for (const auto& p : points)
+    for (double c : p)
+      if (!(c >= 0 && c < kQuarterLimit) || c != std::floor(c)) return false;
+  return true;
+}
+
+ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles) {
+  auto quarter = [&](std::uint32_t v) {
+    const Vec3& p = points[v];
+    return std::array<std::int32_t, 3>{static_cast<std::int32_t>(4 * p[0]), static_cast<std::int32_t>(4 * p[1]),
+                                       static_cast<std::int32_t>(4 * p[2])};
+  };
+  // The border: each undirected edge's net use, +1 for every use from its
+  // smaller vertex to its larger one, -1 for the other direction.
+  std::vector<std::pair<std::uint64_t, int>> uses;
+  uses.reserve(3 * triangles.size());
+  for (const auto& t : triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t a = t[k], b = t[(k + 1) % 3];
+      if (a != b) uses.push_back({a < b ? a << 32 | b : b << 32 | a, a < b ? 1 : -1});
+    }
+  std::sort(uses.begin(), uses.end());
+  std::vector<std::array<std::uint32_t, 2>> border;  // directed tail -> head, repeated by net use
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    int net = 0;
+    while (j < uses.size() && uses[j].first == uses[i].first) net += uses[j++].second;
+    const auto lo = static_cast<std::uint32_t>(uses[i].first >> 32), hi = static_cast<std::uint32_t>(uses[i].first);
+    for (int m = 0; m < std::abs(net); ++m) border.push_back(net > 0 ? std::array{lo, hi} : std::array{hi, lo});
+    i = j;
+  }
+  // Caps: one apex per connected part of the border (every vertex of it is
+  // entered as often as left, so the triangles (apex, head, tail) close it).
+  if (!border.empty()) {
+    std::vector<std::uint32_t> verts;
+    for (const auto& e : border) verts.insert(verts.end(), e.begin(), e.end());
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    auto local = [&](std::uint32_t v) {
+      return static_cast<std::uint32_t>(std::lower_bound(verts.begin(), verts.end(), v) - verts.begin());
+    };
+    std::vector<std::uint32_t> parent(verts.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (const auto& e : border) parent[find(local(e[0]))] = find(local(e[1]));
+    for (std::uint32_t v : verts) cap_points_.push_back(points[v]);
+    std::vector<std::uint32_t> apex(verts.size(), ~0u);
+    std::vector<std::array<double, 4>> sum(verts.size(), {0, 0, 0, 0});
+    for (std::uint32_t i = 0; i < verts.size(); ++i) {
+      auto& s = sum[find(i)];
+      for (int a = 0; a < 3; ++a) s[a] += points[verts[i]][a];
+      s[3] += 1;
+    }
+    for (std::uint32_t i = 0; i < verts.size(); ++i)
+      if (find(i) == i) {
+        apex[i] = static_cast<std::uint32_t>(cap_points_.size());
+        Vec3 c;  // the mean, on the quarter grid
+        for (int a = 0; a < 3; ++a) c[a] = std::round(4 * sum[i][a] / sum[i][3]) / 4;
+        cap_points_.push_back(c);
+      }
+    for (const auto& e : border) caps_.push_back({apex[find(local(e[0]))], local(e[1]), local(e[0])});
+  }
+  auto add = [&](const std::array<std::int32_t, 3>& a, const std::array<std::int32_t, 3>& b,
+                 const std::array<std::int32_t, 3>& c) {
+    const Point u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const std::array<std::int64_t, 3> n{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    // A triangle of no area adds nothing to the winding number, and a
+    // segment through it changes nothing.
+    if (n[0] != 0 || n[1] != 0 || n[2] != 0) tris_.push_back({a, b, c, n});
+  };
+  for (const auto& t : triangles) add(quarter(t[0]), quarter(t[1]), quarter(t[2]));
+  auto cap_quarter = [&](std::uint32_t v) {
+    const Vec3& p = cap_points_[v];
+    return std::array<std::int32_t, 3>{static_cast<std::int32_t>(4 * p[0]), static_cast<std::int32_t>(4 * p[1]),
+                                       static_cast<std::int32_t>(4 * p[2])};
+  };
+  for (const auto& t : caps_) add(cap_quarter(t[0]), cap_quarter(t[1]), cap_quarter(t[2]));
+  boxes_.push_back({});  // index 0 is never a child
+  boxes_.reserve(2 * tris_.size() / kBoxLeaf + 2);
+  if (!tris_.empty()) build(0, static_cast<std::uint32_t>(tris_.size()));
+}
+
+ClosedSurface::Box ClosedSurface::bounds(const Tri& t) {
+  Box b;
+  for (int a = 0; a < 3; ++a) {
+    b.lo[a] = std::min({t.a[a], t.b[a], t.c[a]});
+    b.hi[a] = std::max({t.a[a], t.b[a], t.c[a]});
+  }
+  return b;
+}
+
+std::uint32_t ClosedSurface::build(std::uint32_t begin, std::uint32_t end) {
+  const auto id = static_cast<std::uint32_t>(boxes_.size());
+  boxes_.push_back({});
+  Box box = bounds(tris_[begin]);
+  for (std::uint32_t i = begin + 1; i < end; ++i) {
+    const Box b = bounds(tris_[i]);
+    for (int a = 0; a < 3; ++a) box.lo[a] = std::min(box.lo[a], b.lo[a]), box.hi[a] = std::max(box.hi[a], b.hi[a]);
+  }
+  box.begin = begin;
+  box.end = end;
+  if (end - begin > kBoxLeaf) {
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (box.hi[a] - box.lo[a] > box.hi[axis] - box.lo[axis]) axis = a;
+    const std::uint32_t mid = begin + (end - begin) / 2;
+    auto key = [axis](const Tri& t) { return std::int64_t{t.a[axis]} + t.b[axis] + t.c[axis]; };
+    std::nth_element(tris_.begin() + begin, tris_.begin() + mid, tris_.begin() + end,
+                     [&](const Tri& x, const Tri& y) { return key(x) < key(y); });
+    box.left = build(begin, mid);
+    box.right = build(mid, end);
+  }
+  boxes_[id] = box;
+  return id;
+}
+
+std::optional<int> ClosedSurface::jump(const Point& p, const Point& q) const {
+  if (tris_.empty()) return 0;
+  Point lo, hi;
+  for (int a = 0; a < 3; ++a) lo[a] = std::min(p[a], q[a]), hi[a] = std::max(p[a], q[a]);
+  const Point u{q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+  int total = 0;
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 1;
+  while (top > 0) {
+    const Box& b = boxes_[stack[--top]];
+    if (b.lo[0] > hi[0] || b.hi[0] < lo[0] || b.lo[1] > hi[1] || b.hi[1] < lo[1] || b.lo[2] > hi[2] || b.hi[2] < lo[2])
+      continue;
+    if (b.left != 0) {
+      stack[top++] = b.left;
+      stack[top++] = b.right;
+      continue;
+    }
+    for (std::uint32_t i = b.begin; i < b.end; ++i) {
+      const Tri& t = tris_[i];
+      const Point pa = minus(p, t.a), qa = minus(q, t.a);
+      const Int128 sp = Int128{t.n[0]} * pa[0] + Int128{t.n[1]} * pa[1] + Int128{t.n[2]} * pa[2];
+      const Int128 sq = Int128{t.n[0]} * qa[0] + Int128{t.n[1]} * qa[1] + Int128{t.n[2]} * qa[2];
+      if ((sp > 0 && sq > 0) || (sp < 0 && sq < 0)) continue;  // both ends on one side
+      // The segment reaches the plane: does its line pass inside the
+      // triangle? The three edges' signed volumes with it agree there.
+      const Point ap{t.a[0] - p[0], t.a[1] - p[1], t.a[2] - p[2]}, bp{t.b[0] - p[0], t.b[1] - p[1], t.b[2] - p[2]},
+          cp{t.c[0] - p[0], t.c[1] - p[1], t.c[2] - p[2]};
+      const int e1 = sign_of(det(u, ap, bp)), e2 = sign_of(det(u, bp, cp)), e3 = sign_of(det(u, cp, ap));
+      if ((e1 > 0 || e2 > 0 || e3 > 0) && (e1 < 0 || e2 < 0 || e3 < 0)) continue;  // the line misses it
+      if (e1 == 0 || e2 == 0 || e3 == 0 || sp == 0 || sq == 0) return std::nullopt;
+      total += sp > 0 ? 1 : -1;  // from the normal's side (outside) in: one more
+    }
+  }
+  return total;
+}
+
+ClosedSurface::Point ClosedSurface::outside(int which) const {
+  const Box& root = boxes_.size() > 1 ? boxes_[1] : Box{};
+  return {std::int64_t{root.lo[0]} - 1 - which, std::int64_t{root.lo[1]} - 3 - 5 * which,
+          std::int64_t{root.lo[2]} - 7 - 11 * which};
+}
+
+double winding_number(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles, const Vec3& q) {
+  HalfAngleSum s;
+  for (const auto& t : triangles) s.add(half_angle({points[t[0]], points[t[1]], points[t[2]]}, q));
+  return 2 * s.value() / (4 * kPi);
 }
 
 void orient_positive(const std::vector<Vec3>& points, Tetrahedron& t) {

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "hmc/mesh.hpp"
@@ -52,6 +53,66 @@ class WindingNumber {
   std::vector<Triangle> tri_;             // in tree order once built
   std::vector<std::uint32_t> order_;      // tri_ indices in tree order, while building
   std::vector<Node> nodes_;
+};
+
+/// The winding number at q summed over every triangle, without a tree:
+/// for a few queries, where building the tree would cost more.
+double winding_number(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles, const Vec3& q);
+
+/// A triangle surface closed into a cycle, and the exact jumps of its
+/// winding number along segments (encoder side, non-normative). The
+/// winding number of a closed surface (every edge used as often in one
+/// direction as in the other) is an integer away from it and changes by
+/// one where a segment crosses a triangle, up when it enters against the
+/// triangle's normal: counting crossings from a point whose value is known
+/// gives the value anywhere, exactly, at the cost of a short walk down a
+/// box tree instead of a sum over the whole surface. An open surface is
+/// closed by caps: for each connected part of its border (the edges used
+/// more often in one direction than in the other), triangles from the
+/// border edges to one apex, so that the surface's winding number is the
+/// closed one's less the caps'.
+///
+/// Coordinates are in quarter grid units (4 × grid units; tetrahedron
+/// centroids are then integers): the surface's points must be integers in
+/// [0, 2^22) in grid units (exact() says whether they are).
+class ClosedSurface {
+ public:
+  using Point = std::array<std::int64_t, 3>;
+  ClosedSurface(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles);
+  /// Whether `points` (grid units) qualify: finite integers in [0, 2^22).
+  static bool exact(const std::vector<Vec3>& points);
+
+  /// w(q) − w(p) for the closed surface's winding number w; nothing when
+  /// the segment pq touches a triangle other than by crossing its interior
+  /// at an interior point of the segment (an end in a triangle, the segment
+  /// through an edge or a vertex, or in a triangle's plane across it).
+  std::optional<int> jump(const Point& p, const Point& q) const;
+  /// A point outside every triangle's bounding box, where w = 0 (`which`
+  /// picks one of several, for a retry after a degenerate jump).
+  Point outside(int which) const;
+
+  /// The caps' triangles, at cap_points() (grid units); empty when the
+  /// surface was closed.
+  const std::vector<Vec3>& cap_points() const { return cap_points_; }
+  const std::vector<Triangle>& caps() const { return caps_; }
+
+ private:
+  struct Tri {
+    std::array<std::int32_t, 3> a, b, c;  // corners (quarter units)
+    std::array<std::int64_t, 3> n;        // (b − a) × (c − a)
+  };
+  struct Box {
+    std::array<std::int32_t, 3> lo, hi;
+    std::uint32_t begin = 0, end = 0;   // range in tris_ (leaf) ...
+    std::uint32_t left = 0, right = 0;  // ... or children (left != 0)
+  };
+  std::uint32_t build(std::uint32_t begin, std::uint32_t end);
+  static Box bounds(const Tri& t);
+
+  std::vector<Tri> tris_;
+  std::vector<Box> boxes_;
+  std::vector<Vec3> cap_points_;
+  std::vector<Triangle> caps_;
 };
 
 /// Oriented boundary faces of a tetrahedral mesh (faces used by exactly one
