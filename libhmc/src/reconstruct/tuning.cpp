@@ -9,6 +9,8 @@
 #include "entropy/rice.hpp"
 #include "reconstruct/distance.hpp"
 #include "reconstruct/winding.hpp"
+#include "util/morton.hpp"
+#include "util/radix_sort.hpp"
 
 namespace hmc::detail {
 
@@ -348,44 +350,57 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   };
   if (closed) {
     // The closed surface's winding number W, an integer off it, counted
-    // from a point outside to one tetrahedron's centroid and from there
-    // across the faces to the neighbours' (breadth first); a tetrahedron
-    // that no such count reaches (its centroid on a triangle) gets the
-    // direct sum. Centroids in quarter units: four times, integers.
+    // from one centroid to the next in the Morton order of the centroids
+    // (short segments, which open the same boxes one after the other), and
+    // where a count is degenerate, from a neighbour's centroid or from a
+    // point outside; a tetrahedron that no count reaches (its centroid on
+    // a triangle) gets the plain sum. Centroids in quarter units: four
+    // times, integers.
     std::vector<ClosedSurface::Point> c4(nt);
+    std::int64_t any4 = 0;
     for (std::size_t t = 0; t < nt; ++t) {
       ClosedSurface::Point c{0, 0, 0};
       for (auto v : dt.tets[t])
         for (int a = 0; a < 3; ++a) c[a] += points[v][a];
       c4[t] = c;
+      any4 |= c[0] | c[1] | c[2];
     }
+    int shift = 0;  // 12 bits per axis of the Morton key, 28 of the index
+    while ((any4 >> shift) >= (std::int64_t{1} << 12)) ++shift;
+    constexpr int kIndexBits = 28;
+    const bool reorder = nt < (std::size_t{1} << kIndexBits);
+    std::vector<std::uint64_t> order(nt);
+    for (std::size_t t = 0; t < nt; ++t) {
+      const auto& c = c4[t];
+      const GridPoint m{static_cast<std::uint32_t>(c[0] >> shift), static_cast<std::uint32_t>(c[1] >> shift),
+                        static_cast<std::uint32_t>(c[2] >> shift)};
+      order[t] = reorder ? morton_key(m, 12) << kIndexBits | t : t;
+    }
+    if (reorder) radix_sort(order, 64);
+    const std::uint64_t index_mask = reorder ? (std::uint64_t{1} << kIndexBits) - 1 : ~std::uint64_t{0};
     std::vector<int> winding(nt);
     std::vector<std::uint8_t> state(nt, 0);  // 0 unknown, 1 counted, 2 summed
-    std::vector<std::uint32_t> queue, summed;
-    queue.reserve(nt);
-    for (std::size_t s = 0; s < nt; ++s) {
-      if (state[s] != 0) continue;
-      std::optional<int> from_outside;
-      for (int which = 0; which < 4 && !from_outside; ++which) from_outside = closed->jump(closed->outside(which), c4[s]);
-      if (!from_outside) {
-        state[s] = 2;
-        summed.push_back(static_cast<std::uint32_t>(s));
+    std::vector<std::uint32_t> summed;
+    std::size_t last = nt;  // the last counted tetrahedron
+    for (const std::uint64_t key : order) {
+      const auto t = static_cast<std::size_t>(key & index_mask);
+      std::optional<int> w_t;
+      if (last < nt)
+        if (const auto j = closed->jump(c4[last], c4[t])) w_t = winding[last] + *j;
+      for (int k = 0; k < 4 && !w_t; ++k) {
+        const std::uint32_t u = dt.neighbors[t][k];
+        if (u != kNoTet && state[u] == 1)
+          if (const auto j = closed->jump(c4[u], c4[t])) w_t = winding[u] + *j;
+      }
+      for (int which = 0; which < 4 && !w_t; ++which) w_t = closed->jump(closed->outside(which), c4[t]);
+      if (!w_t) {
+        state[t] = 2;
+        summed.push_back(static_cast<std::uint32_t>(t));
         continue;
       }
-      state[s] = 1;
-      winding[s] = *from_outside;
-      queue.assign(1, static_cast<std::uint32_t>(s));
-      for (std::size_t head = 0; head < queue.size(); ++head) {
-        const std::uint32_t t = queue[head];
-        for (std::uint32_t u : dt.neighbors[t]) {
-          if (u == kNoTet || state[u] != 0) continue;
-          if (const auto j = closed->jump(c4[t], c4[u])) {
-            state[u] = 1;
-            winding[u] = winding[t] + *j;
-            queue.push_back(u);
-          }
-        }
-      }
+      state[t] = 1;
+      winding[t] = *w_t;
+      last = t;
     }
     // Building the tree costs about as much as 50 plain sums over the
     // surface's triangles (the horse: 2 centroids of 329,502 need either).

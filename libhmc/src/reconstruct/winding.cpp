@@ -347,6 +347,24 @@ std::optional<int> ClosedSurface::jump(const Point& p, const Point& q) const {
   Point lo, hi;
   for (int a = 0; a < 3; ++a) lo[a] = std::min(p[a], q[a]), hi[a] = std::max(p[a], q[a]);
   const Point u{q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+  // The segment p + s·u, 0 <= s <= 1, meets a box only if the parameter
+  // intervals of its three slabs overlap there (in floating point, on the
+  // box grown by one unit: a cull, which the exact test below does not rely
+  // on; a long segment's bounding box holds many boxes it misses).
+  double inv[3];
+  for (int a = 0; a < 3; ++a) inv[a] = u[a] != 0 ? 1.0 / static_cast<double>(u[a]) : 0.0;
+  auto meets = [&](const Box& b) {
+    double s0 = 0, s1 = 1;
+    for (int a = 0; a < 3; ++a) {
+      if (u[a] == 0) continue;  // within the slab: the bounding-box test
+      double e0 = (static_cast<double>(b.lo[a] - 1) - static_cast<double>(p[a])) * inv[a];
+      double e1 = (static_cast<double>(b.hi[a] + 1) - static_cast<double>(p[a])) * inv[a];
+      if (e0 > e1) std::swap(e0, e1);
+      s0 = std::max(s0, e0);
+      s1 = std::min(s1, e1);
+    }
+    return s0 <= s1;
+  };
   int total = 0;
   std::uint32_t stack[64];
   int top = 0;
@@ -355,6 +373,7 @@ std::optional<int> ClosedSurface::jump(const Point& p, const Point& q) const {
     const Box& b = boxes_[stack[--top]];
     if (b.lo[0] > hi[0] || b.hi[0] < lo[0] || b.lo[1] > hi[1] || b.hi[1] < lo[1] || b.lo[2] > hi[2] || b.hi[2] < lo[2])
       continue;
+    if (!meets(b)) continue;
     if (b.left != 0) {
       stack[top++] = b.left;
       stack[top++] = b.right;
