@@ -33,11 +33,13 @@ struct GridMesh {
 /// be a finer level's points than the tetrahedralized ones.
 ///
 /// With integer surface points (ClosedSurface::exact) the winding number
-/// is that of the surface closed by caps, counted exactly along a walk
-/// through the tetrahedra, less the caps' own (ClosedSurface); the sum over
-/// the surface's triangles (WindingNumber) is only taken at centroids that
-/// lie on a triangle. On the shared models at q = 12 the labels are those
-/// of the plain sum at every centroid.
+/// is that of the surface closed by caps, counted exactly from one
+/// tetrahedron's centroid to the next, less the caps' own (ClosedSurface);
+/// the sum over the surface's triangles (WindingNumber) is only taken at
+/// centroids that lie on a triangle. On the shared models at q = 12 (1 and
+/// 4 levels) the streams are those of the sum at every centroid, except
+/// the open Stanford bunny's (2 bytes more: the caps' sum is approximate
+/// too, and near the holes a label can turn).
 ///
 /// `cache`, when given, carries the structures built for the surface from
 /// one call to the next with the same `surface_points` and `surface`

@@ -211,7 +211,7 @@ constexpr std::uint32_t kBoxLeaf = 4;
 constexpr double kQuarterLimit = 4194304.0;  // 2^22 grid units
 
 // det [u; v; w] for entries below 2^26 in magnitude: the minors stay below
-// 2^53, the result below 2^80.
+// 2^53, the result below 2^81.
 Int128 det(const ClosedSurface::Point& u, const ClosedSurface::Point& v, const ClosedSurface::Point& w) {
   return det3({u[0], u[1], u[2]}, {v[0], v[1], v[2]}, {w[0], w[1], w[2]});
 }
