@@ -216,6 +216,11 @@ Int128 det(const ClosedSurface::Point& u, const ClosedSurface::Point& v, const C
   return det3({u[0], u[1], u[2]}, {v[0], v[1], v[2]}, {w[0], w[1], w[2]});
 }
 
+// A point of grid units on the quarter grid (exact: multiples of 1/4 below 2^22).
+std::array<std::int32_t, 3> quarter(const Vec3& p) {
+  return {static_cast<std::int32_t>(4 * p[0]), static_cast<std::int32_t>(4 * p[1]), static_cast<std::int32_t>(4 * p[2])};
+}
+
 ClosedSurface::Point minus(const ClosedSurface::Point& a, const std::array<std::int32_t, 3>& b) {
   return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
 }
@@ -230,11 +235,6 @@ bool ClosedSurface::exact(const std::vector<Vec3>& points) {
 }
 
 ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles) {
-  auto quarter = [&](std::uint32_t v) {
-    const Vec3& p = points[v];
-    return std::array<std::int32_t, 3>{static_cast<std::int32_t>(4 * p[0]), static_cast<std::int32_t>(4 * p[1]),
-                                       static_cast<std::int32_t>(4 * p[2])};
-  };
   // The border: each undirected edge's net use, +1 for every use from its
   // smaller vertex to its larger one, -1 for the other direction.
   std::vector<std::pair<std::uint64_t, int>> uses;
@@ -296,13 +296,8 @@ ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<
     // segment through it changes nothing.
     if (n[0] != 0 || n[1] != 0 || n[2] != 0) tris_.push_back({a, b, c, n});
   };
-  for (const auto& t : triangles) add(quarter(t[0]), quarter(t[1]), quarter(t[2]));
-  auto cap_quarter = [&](std::uint32_t v) {
-    const Vec3& p = cap_points_[v];
-    return std::array<std::int32_t, 3>{static_cast<std::int32_t>(4 * p[0]), static_cast<std::int32_t>(4 * p[1]),
-                                       static_cast<std::int32_t>(4 * p[2])};
-  };
-  for (const auto& t : caps_) add(cap_quarter(t[0]), cap_quarter(t[1]), cap_quarter(t[2]));
+  for (const auto& t : triangles) add(quarter(points[t[0]]), quarter(points[t[1]]), quarter(points[t[2]]));
+  for (const auto& t : caps_) add(quarter(cap_points_[t[0]]), quarter(cap_points_[t[1]]), quarter(cap_points_[t[2]]));
   boxes_.push_back({});  // index 0 is never a child
   boxes_.reserve(2 * tris_.size() / kBoxLeaf + 2);
   if (!tris_.empty()) build(0, static_cast<std::uint32_t>(tris_.size()));
