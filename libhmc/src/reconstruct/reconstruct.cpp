@@ -313,31 +313,32 @@ void repair(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside, con
   const std::vector<std::uint32_t>& incident = by_vertex.incident;
   DefectScratch scratch;
   // face[t]: bit k set when face k of t is on the interface, bit 4 when t
-  // is inside, kept up to date by flip(); back[t], bits 2k and 2k + 1: the
-  // local index of t's face k in the neighbour across it. A vertex's defects
-  // then read a byte per incident tetrahedron, not its neighbours' labels
-  // (most of the repair's time went into those scattered reads).
-  std::vector<std::uint8_t> face(nt, 0), back(nt, 0);
+  // is inside, kept up to date by flip(). A vertex's defects then read a
+  // byte per incident tetrahedron, not its neighbours' labels (most of the
+  // repair's time went into those scattered reads).
+  std::vector<std::uint8_t> face(nt, 0);
   for (std::uint32_t t = 0; t < nt; ++t) {
-    unsigned bits = inside[t] ? 16u : 0u, across = 0;
+    unsigned bits = inside[t] ? 16u : 0u;
     for (int k = 0; k < 4; ++k) {
       const std::uint32_t u = dt.neighbors[t][k];
       if (u == kNoTet ? inside[t] != 0 : (inside[u] != 0) != (inside[t] != 0)) bits |= 1u << k;
-      if (u == kNoTet) continue;
-      int j = 0;
-      while (dt.neighbors[u][j] != t) ++j;
-      across |= static_cast<unsigned>(j) << (2 * k);
     }
     face[t] = static_cast<std::uint8_t>(bits);
-    back[t] = static_cast<std::uint8_t>(across);
   }
-  // Inverting t's label puts each of its four faces on the interface or off it.
+  // Inverting t's label puts each of its four faces on the interface or off
+  // it, in t and in the neighbour across (where it is the face opposite the
+  // neighbour's vertex that t lacks: found when needed, since few
+  // tetrahedra are ever flipped and a table of them for all was a tenth of
+  // the repair's time).
   auto flip = [&](std::uint32_t t) {
     inside[t] ^= 1;
     face[t] ^= 0x1F;
     for (int k = 0; k < 4; ++k) {
       const std::uint32_t u = dt.neighbors[t][k];
-      if (u != kNoTet) face[u] ^= static_cast<std::uint8_t>(1u << ((back[t] >> (2 * k)) & 3u));
+      if (u == kNoTet) continue;
+      int j = 0;
+      while (dt.neighbors[u][j] != t) ++j;
+      face[u] ^= static_cast<std::uint8_t>(1u << j);
     }
   };
   // Is face k of t on the interface when t's label is `label`?
