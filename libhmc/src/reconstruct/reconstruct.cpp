@@ -120,24 +120,27 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
   // four times the face itself, at the moment of a decoder's peak.
   auto parts = [&](std::uint32_t i) { return parts_of(pts, faces[i]); };
   std::vector<std::uint8_t> keep(nf, 1);
-  split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const auto& f = faces[i];
-      const TriangleParts t = parts_of(pts, f);
-      const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
-      const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
-      // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
-      if (th[kCircleRadius] &&
-          compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
-        keep[i] = 0;
-      // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
-      if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
-      // (c) density: 256·D <= T·s² (a face much larger than the local spacing squared).
-      if (th[kDensity] &&
-          compare(U256::from(256).mul(hi(t.d), lo(t.d)), U256::from(smin).mul(smin).mul(th[kDensity])) > 0)
-        keep[i] = 0;
-    }
-  });
+  // (a) to (c) test each face on its own (none of them set: every face kept).
+  if (th[kCircleRadius] || th[kEdgeRatio] || th[kDensity]) {
+    split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const auto& f = faces[i];
+        const TriangleParts t = parts_of(pts, f);
+        const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
+        const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
+        // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
+        if (th[kCircleRadius] &&
+            compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
+          keep[i] = 0;
+        // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
+        if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
+        // (c) density: 256·D <= T·s² (a face much larger than the local spacing squared).
+        if (th[kDensity] &&
+            compare(U256::from(256).mul(hi(t.d), lo(t.d)), U256::from(smin).mul(smin).mul(th[kDensity])) > 0)
+          keep[i] = 0;
+      }
+    });
+  }
   // Edge adjacency among the faces kept so far, for the neighbour filters.
   const bool neighbours = th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio];
   if (neighbours) {
