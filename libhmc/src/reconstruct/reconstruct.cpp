@@ -81,6 +81,40 @@ TriangleParts parts_of(const std::vector<GridPoint>& pts, const std::array<std::
 std::uint64_t hi(U128 x) { return static_cast<std::uint64_t>(x >> 64); }
 std::uint64_t lo(U128 x) { return static_cast<std::uint64_t>(x); }
 
+// R²(a) < R²(b), exactly: N_a·D_b < N_b·D_a; an infinite radius (a
+// collinear triangle, D = 0) is larger than any finite one.
+bool radius_less(const TriangleParts& a, const TriangleParts& b) {
+  const bool ia = a.d == 0, ib = b.d == 0;
+  if (ia || ib) return !ia && ib;
+  return compare(a.num().mul(hi(b.d), lo(b.d)), b.num().mul(hi(a.d), lo(a.d))) < 0;
+}
+
+// A face's parts with R² as a double, which decides a comparison when the
+// two differ by more than 10^-12 relatively (its own error is below
+// 6·2^-53: exact edges, two roundings for N, three for D from its two
+// 64-bit halves, one for the quotient); closer ones, and infinite radii
+// (D = 0), go to the exact test. So the result is radius_less()'s.
+struct FaceRadius {
+  TriangleParts p;
+  double r2;
+};
+
+FaceRadius face_radius(const std::vector<GridPoint>& pts, const std::array<std::uint32_t, 3>& f) {
+  const TriangleParts t = parts_of(pts, f);
+  const double n = static_cast<double>(t.e[0]) * static_cast<double>(t.e[1]) * static_cast<double>(t.e[2]);
+  const double d = static_cast<double>(hi(t.d)) * 18446744073709551616.0 + static_cast<double>(lo(t.d));
+  return FaceRadius{t, t.d == 0 ? 0.0 : n / d};
+}
+
+// R²(a) < R²(b), exactly.
+bool radius_below(const FaceRadius& a, const FaceRadius& b) {
+  if (a.p.d != 0 && b.p.d != 0) {
+    if (a.r2 < b.r2 * (1 - 1e-12)) return true;
+    if (a.r2 > b.r2 * (1 + 1e-12)) return false;
+  }
+  return radius_less(a.p, b.p);
+}
+
 // The candidate filters of spec 11.2a, applied to the faces that passed
 // the edge test. `cand` is indexed by 4·tet + local face and is updated on
 // both sides of every face.
@@ -191,11 +225,6 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     // the largest neighbour edge ratio (as fractions compared exactly).
     std::vector<std::uint8_t> has(nf, 0);
     std::vector<std::uint32_t> max_r(nf, ~0u), max_ratio(nf, ~0u);
-    auto r_less = [](const TriangleParts& a, const TriangleParts& b) {  // R²(a) < R²(b)
-      const bool ia = a.d == 0, ib = b.d == 0;
-      if (ia || ib) return !ia && ib;
-      return compare(a.num().mul(hi(b.d), lo(b.d)), b.num().mul(hi(a.d), lo(a.d))) < 0;
-    };
     auto ratio_less = [](const TriangleParts& a, const TriangleParts& b) {  // Lmin²/Lmax² of a < of b
       const auto& x = a.e;
       const auto& y = b.e;
@@ -203,29 +232,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
       return xn * yd < yn * xd;
     };
-    // R² as a double decides a comparison when the two differ by more than
-    // 10^-12 relatively (its own error is below 6·2^-53: exact edges, two
-    // roundings for N, three for D from its two 64-bit halves, one for the
-    // quotient); closer ones, and infinite radii (D = 0), go to the exact
-    // test.
-    struct Face {
-      TriangleParts p;
-      double r2;
-    };
-    auto face = [&](std::uint32_t f) {
-      const TriangleParts t = parts(f);
-      const double n = static_cast<double>(t.e[0]) * static_cast<double>(t.e[1]) * static_cast<double>(t.e[2]);
-      const double d = static_cast<double>(hi(t.d)) * 18446744073709551616.0 + static_cast<double>(lo(t.d));
-      return Face{t, t.d == 0 ? 0.0 : n / d};
-    };
-    auto r_below = [&](const Face& a, const Face& b) {  // R²(a) < R²(b)
-      if (a.p.d != 0 && b.p.d != 0) {
-        if (a.r2 < b.r2 * (1 - 1e-12)) return true;
-        if (a.r2 > b.r2 * (1 + 1e-12)) return false;
-      }
-      return r_less(a.p, b.p);
-    };
-    std::vector<Face> group;            // the faces on one edge
+    std::vector<FaceRadius> group;      // the faces on one edge
     std::vector<std::uint32_t> around;  // their ids
     for (std::size_t i = 0; i < nrefs;) {
       const EdgeRef first = ref(i);
@@ -239,17 +246,17 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       const std::size_t g = j - i;
       if (g > 1) {
         group.clear();
-        for (std::uint32_t f : around) group.push_back(face(f));
+        for (std::uint32_t f : around) group.push_back(face_radius(pts, faces[f]));
         // A face's best neighbour around this edge is the first largest
         // among the others: the first largest of all (r1, q1), or for that
         // face itself the first largest of the rest (r2, q2).
         std::size_t r1 = 0, q1 = 0, r2 = g, q2 = g;
         for (std::size_t b = 1; b < g; ++b) {
-          if (r_below(group[r1], group[b])) r1 = b;
+          if (radius_below(group[r1], group[b])) r1 = b;
           if (ratio_less(group[q1].p, group[b].p)) q1 = b;
         }
         for (std::size_t b = 0; b < g; ++b) {
-          if (b != r1 && (r2 == g || r_below(group[r2], group[b]))) r2 = b;
+          if (b != r1 && (r2 == g || radius_below(group[r2], group[b]))) r2 = b;
           if (b != q1 && (q2 == g || ratio_less(group[q2].p, group[b].p))) q2 = b;
         }
         for (std::size_t a = 0; a < g; ++a) {
@@ -257,7 +264,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
           has[f] = 1;
           // Then against the best so far.
           const std::size_t br = a == r1 ? r2 : r1, bq = a == q1 ? q2 : q1;
-          if (max_r[f] == ~0u || r_below(face(max_r[f]), group[br])) max_r[f] = around[br];
+          if (max_r[f] == ~0u || radius_below(face_radius(pts, faces[max_r[f]]), group[br])) max_r[f] = around[br];
           if (max_ratio[f] == ~0u || ratio_less(parts(max_ratio[f]), group[bq].p)) max_ratio[f] = around[bq];
         }
       }
@@ -720,35 +727,6 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
   return scale;
 }
 
-int compare_circumradius(const std::vector<GridPoint>& pts, const std::array<std::uint32_t, 3>& a,
-                         const std::array<std::uint32_t, 3>& b) {
-  // R² = |bc|²|ca|²|ab|² / (4 |u × v|²); compare N_a·D_b with N_b·D_a.
-  auto parts = [&](const std::array<std::uint32_t, 3>& f, U256& num, std::uint64_t& dhi, std::uint64_t& dlo) {
-    const GridPoint &p = pts[f[0]], &q = pts[f[1]], &r = pts[f[2]];
-    num = U256::from(dist2(q, r)).mul(dist2(r, p)).mul(dist2(p, q));
-    std::int64_t u[3], v[3];
-    for (int i = 0; i < 3; ++i) {
-      u[i] = static_cast<std::int64_t>(q[i]) - p[i];
-      v[i] = static_cast<std::int64_t>(r[i]) - p[i];
-    }
-    U128 d = 0;
-    for (int i = 0; i < 3; ++i) {
-      const std::int64_t c = u[(i + 1) % 3] * v[(i + 2) % 3] - u[(i + 2) % 3] * v[(i + 1) % 3];
-      const auto m = static_cast<U128>(c < 0 ? -c : c);
-      d += m * m;
-    }
-    dhi = static_cast<std::uint64_t>(d >> 64);
-    dlo = static_cast<std::uint64_t>(d);
-  };
-  U256 na, nb;
-  std::uint64_t ah, al, bh, bl;
-  parts(a, na, ah, al);
-  parts(b, nb, bh, bl);
-  const bool inf_a = (ah | al) == 0, inf_b = (bh | bl) == 0;  // collinear: infinite radius
-  if (inf_a || inf_b) return inf_a == inf_b ? 0 : (inf_a ? 1 : -1);
-  return compare(na.mul(bh, bl), nb.mul(ah, al));
-}
-
 std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                           const std::vector<std::uint64_t>& scale, const ReconParams& p,
                                           HelperBudget* helpers) {
@@ -817,9 +795,13 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
         in[ni++] = face_of(dt, t, k);
       }
     }
-    const auto& max_in = compare_circumradius(points, in[0], in[1]) >= 0 ? in[0] : in[1];
-    const auto& max_out = compare_circumradius(points, out[0], out[1]) >= 0 ? out[0] : out[1];
-    return compare_circumradius(points, max_in, max_out) < 0;
+    // Each face's radius once; the larger of each pair (the first on a tie,
+    // which has the same radius), then strictly smaller inside.
+    const FaceRadius ri[2] = {face_radius(points, in[0]), face_radius(points, in[1])};
+    const FaceRadius ro[2] = {face_radius(points, out[0]), face_radius(points, out[1])};
+    const FaceRadius& max_in = radius_below(ri[0], ri[1]) ? ri[1] : ri[0];
+    const FaceRadius& max_out = radius_below(ro[0], ro[1]) ? ro[1] : ro[0];
+    return radius_below(max_in, max_out);
   };
   std::vector<std::uint32_t> frontier, next, flips;
   std::vector<std::uint8_t> queued(nt, 0);

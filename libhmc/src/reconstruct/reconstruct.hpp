@@ -229,8 +229,4 @@ inline std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {
 enum FilterId { kCircleRadius = 0, kEdgeRatio = 1, kDensity = 2, kLone = 3, kNeighbourRadius = 4, kNeighbourRatio = 5 };
 constexpr int kFilterCount = 6;
 
-/// Exact comparison of triangle circumradii: sign of R²(a) − R²(b).
-int compare_circumradius(const std::vector<GridPoint>& points, const std::array<std::uint32_t, 3>& a,
-                         const std::array<std::uint32_t, 3>& b);
-
 }  // namespace hmc::detail
