@@ -253,29 +253,37 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
 }
 
 // The sort key of child c (see the constructor), distinct for each child.
-ChildKeys::UInt128 ChildKeys::key(unsigned first_mask, int gap, std::size_t c) const {
-  return (((first_mask >> c) & 1u) ? 0 : UInt128{1} << 112) +
-         (gap == kFarRanking        ? UInt128{far_[c]}
-          : gap > 0 && gapped_      ? base_[c] - static_cast<UInt128>(gap) * step_[c]
-                                    : UInt128{tie_[c]});
+void ChildKeys::keys(unsigned first_mask, int gap, std::array<UInt128, 8>& out) const {
+  // The weight's keys for all eight children (one test of the weight, not
+  // eight), then the children outside first_mask after all the others.
+  if (gap == kFarRanking) {
+    for (std::size_t c = 0; c < 8; ++c) out[c] = far_[c];
+  } else if (gap > 0 && gapped_) {
+    const auto g = static_cast<std::uint64_t>(gap);
+    for (std::size_t c = 0; c < 8; ++c) out[c] = base_[c] - step_[c] * g;
+  } else {
+    for (std::size_t c = 0; c < 8; ++c) out[c] = tie_[c];
+  }
+  for (std::size_t c = 0; c < 8; ++c)
+    if (!((first_mask >> c) & 1u)) out[c] += UInt128{1} << 112;
 }
 
 void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) const {
-  std::array<UInt128, 8> keys{};
-  for (std::size_t c = 0; c < 8; ++c) keys[c] = key(first_mask, gap, c);
-  const std::array<int, 8> place = ranks_of(keys);  // the keys are distinct
+  std::array<UInt128, 8> k{};
+  keys(first_mask, gap, k);
+  const std::array<int, 8> place = ranks_of(k);  // the keys are distinct
   for (std::size_t c = 0; c < 8; ++c) order[static_cast<std::size_t>(place[c])] = static_cast<int>(c);
 }
 
 std::uint8_t ChildKeys::symbol(unsigned first_mask, int gap, unsigned occupancy) const {
-  std::array<UInt128, 8> keys{};
-  for (std::size_t c = 0; c < 8; ++c) keys[c] = key(first_mask, gap, c);
+  std::array<UInt128, 8> k{};
+  keys(first_mask, gap, k);
   // An occupied child's rank is the number of children with smaller keys.
   unsigned ranked = 0;
   for (unsigned occ = occupancy & 0xFFu; occ != 0; occ &= occ - 1) {
     const auto c = static_cast<std::size_t>(__builtin_ctz(occ));
     int rank = 0;
-    for (std::size_t o = 0; o < 8; ++o) rank += keys[o] < keys[c];
+    for (std::size_t o = 0; o < 8; ++o) rank += k[o] < k[c];
     ranked |= 1u << rank;
   }
   return occupancy_order().index[ranked];

@@ -84,7 +84,9 @@ class ChildKeys {
 
  private:
   __extension__ typedef unsigned __int128 UInt128;
-  UInt128 key(unsigned first_mask, int gap, std::size_t c) const;
+  /// Each child's sort key for weight `gap`: (not in first_mask, then the
+  /// weight's key), distinct across the children.
+  void keys(unsigned first_mask, int gap, std::array<UInt128, 8>& out) const;
   std::array<std::uint8_t, 8> tie_{};  // each child's place by (t, e, child number)
   bool gapped_ = false;                // a gap weight changes the order (k^2 |n|^2 > 0)
   std::array<UInt128, 8> base_{}, step_{};  // the sort keys (constructor)
