@@ -252,7 +252,7 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   }
 }
 
-// The sort key of child c (see the constructor), distinct for each child.
+// The sort keys of the eight children (see the constructor), distinct.
 void ChildKeys::keys(unsigned first_mask, int gap, std::array<UInt128, 8>& out) const {
   // The weight's keys for all eight children (one test of the weight, not
   // eight), then the children outside first_mask after all the others.
