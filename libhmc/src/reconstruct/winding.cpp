@@ -360,6 +360,13 @@ std::optional<int> ClosedSurface::jump(const Point& p, const Point& q) const {
     }
     return s0 <= s1;
   };
+  // Only a segment long against the surface's extent passes the bounding
+  // boxes of many boxes it misses; for the short ones (from a centroid to
+  // the next) the slab test rejected under 2 % of the boxes that their
+  // bounding box meets (horse, 4 levels), and cost more than it saved.
+  const Box& root = boxes_[1];
+  bool slab = false;
+  for (int a = 0; a < 3; ++a) slab = slab || (hi[a] - lo[a]) * 16 > std::int64_t{root.hi[a]} - root.lo[a];
   int total = 0;
   std::uint32_t stack[64];
   int top = 0;
@@ -368,7 +375,7 @@ std::optional<int> ClosedSurface::jump(const Point& p, const Point& q) const {
     const Box& b = boxes_[stack[--top]];
     if (b.lo[0] > hi[0] || b.hi[0] < lo[0] || b.lo[1] > hi[1] || b.hi[1] < lo[1] || b.lo[2] > hi[2] || b.hi[2] < lo[2])
       continue;
-    if (!meets(b)) continue;
+    if (slab && !meets(b)) continue;
     if (b.left != 0) {
       stack[top++] = b.left;
       stack[top++] = b.right;
