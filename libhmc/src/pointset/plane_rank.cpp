@@ -91,26 +91,37 @@ Frame frame_of(const std::array<std::int64_t, 3>& n, std::size_t j) {
 // 2^-40 times its diagonal entry.
 bool fit_quadric(const Doubled* neighbours, int f, const std::array<std::int64_t, 3>& o, const Frame& frame,
                  std::array<double, 6>& coef) {
-  // beta[i] = (1, u, v, u^2, uv, v^2) and w of point i.
-  std::array<std::array<double, 7>, kMaxRankPoints> beta;
+  // The normal equations' sums m[x][y] = sum_i beta_x beta_y (y >= x) and
+  // r[x] = sum_i beta_x w, beta = (1, u, v, u^2, uv, v^2), each summed in
+  // point order. Products with beta_0 = 1 are exact, so m[0][3..5] are the
+  // same sums as m[1][1], m[1][2], m[2][2] and m[0][0] is f: 23 sums, kept
+  // in pairs of lanes (each lane an IEEE product and sum of its own, the
+  // same result as one sum at a time).
+  typedef double Pair __attribute__((vector_size(16)));
+  Pair sum[12] = {};
   for (int i = 0; i < f; ++i) {
-    const auto p = frame.of({neighbours[i][0] - o[0], neighbours[i][1] - o[1], neighbours[i][2] - o[2]});
-    const double u = p[0], v = p[1];
-    beta[static_cast<std::size_t>(i)] = {1.0, u, v, u * u, u * v, v * v, p[2]};
+    const auto x = frame.of({neighbours[i][0] - o[0], neighbours[i][1] - o[1], neighbours[i][2] - o[2]});
+    const double u = x[0], v = x[1], w = x[2];
+    const Pair uv = {u, v};
+    const Pair a = u * uv;            // u^2, uv
+    const Pair b = {v * v, w};        // v^2, w
+    const Pair c = {a[1], b[0]};      // uv, v^2
+    const Pair e = {w, b[0]};         // w, v^2
+    const Pair term[12] = {uv, a, b, u * a, u * b, v * a, v * b, a[0] * a, a[0] * b, a[1] * c, c * e, Pair{b[0] * w, 0.0}};
+    for (std::size_t at = 0; at < 12; ++at) sum[at] = sum[at] + term[at];
   }
-  // The 27 sums (m[x][y] for y >= x, then r[x] as column 6) advance
-  // together, point by point: independent chains the processor overlaps,
-  // each still summed in point order (the same result as one sum at a time).
-  double sum[27] = {};
-  for (std::size_t i = 0; i < static_cast<std::size_t>(f); ++i) {
-    const auto& b = beta[i];
-    std::size_t at = 0;
-    for (std::size_t x = 0; x < 6; ++x)
-      for (std::size_t y = x; y < 7; ++y, ++at) sum[at] = sum[at] + b[x] * b[y];
-  }
-  double m[6][6] = {}, r[6] = {};
-  for (std::size_t x = 0, at = 0; x < 6; ++x)
-    for (std::size_t y = x; y < 7; ++y, ++at) (y < 6 ? m[x][y] : r[x]) = sum[at];
+  // sum[0] = (u, v), [1] = (u^2, uv), [2] = (v^2, w), [3] = u (u^2, uv),
+  // [4] = u (v^2, w), [5] = v (u^2, uv), [6] = v (v^2, w), [7] = u^2 (u^2,
+  // uv), [8] = u^2 (v^2, w), [9] = uv (uv, v^2), [10] = (uv w, v^4), [11] =
+  // (v^2 w, 0).
+  const double su = sum[0][0], sv = sum[0][1], suu = sum[1][0], suv = sum[1][1], svv = sum[2][0];
+  const double m[6][6] = {{static_cast<double>(f), su, sv, suu, suv, svv},
+                          {su, suu, suv, sum[3][0], sum[3][1], sum[4][0]},
+                          {sv, suv, svv, sum[5][0], sum[5][1], sum[6][0]},
+                          {suu, sum[3][0], sum[5][0], sum[7][0], sum[7][1], sum[8][0]},
+                          {suv, sum[3][1], sum[5][1], sum[7][1], sum[9][0], sum[9][1]},
+                          {svv, sum[4][0], sum[6][0], sum[8][0], sum[9][1], sum[10][1]}};
+  const double r[6] = {sum[2][1], sum[4][1], sum[6][1], sum[8][1], sum[10][0], sum[11][0]};
   // m = L D L^T, L unit lower triangular (l[z][x], x < z).
   double l[6][6] = {}, dg[6] = {};
   for (std::size_t x = 0; x < 6; ++x) {
@@ -192,10 +203,17 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   if (fit >= 6 && fit <= kMaxRankPoints && n[j] > 0 &&
       fit_quadric(neighbours, fit, {2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h,
                                     2 * std::int64_t{p[2]} * h + h}, frame, coef)) {
+    // The children's offsets from the centre are (+-h/2, +-h/2, +-h/2), so
+    // their frame coordinates are sums and differences of three columns.
+    const std::int64_t half = h / 2;
+    std::array<std::array<std::int64_t, 3>, 3> column{};
+    for (std::size_t a = 0; a < 3; ++a) column[a] = {half * frame.t[a], half * frame.b[a], half * frame.n[a]};
     for (std::size_t c = 0; c < 8; ++c) {
-      std::array<std::int64_t, 3> delta{};
-      for (std::size_t a = 0; a < 3; ++a) delta[a] = (((c >> (2 - a)) & 1) != 0 ? h : -h) / 2;
-      const auto x = frame.of(delta);
+      std::array<std::int64_t, 3> at{0, 0, 0};
+      for (std::size_t a = 0; a < 3; ++a)
+        for (std::size_t i = 0; i < 3; ++i) at[i] += ((c >> (2 - a)) & 1) != 0 ? column[a][i] : -column[a][i];
+      const std::array<double, 3> x{static_cast<double>(at[0]), static_cast<double>(at[1]),
+                                    static_cast<double>(at[2])};
       const double u = x[0], v = x[1];
       const double fitted = coef[0] + coef[1] * u + coef[2] * v + coef[3] * (u * u) + coef[4] * (u * v) +
                             coef[5] * (v * v);
