@@ -944,6 +944,20 @@ TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
     CHECK(got == want);
     CHECK(keys.symbol(mask, kFarRanking, occupancy) == ranked_symbol(want, occupancy));
     far_decided += want != std::array<int, 8>{0, 1, 2, 3, 4, 5, 6, 7} && std::get<1>(far_key[0]) != 0;
+    // symbols(): for a list of weights in any order, with repeats (its
+    // gapped keys step from each weight to the next), the symbols of the
+    // orders that keys() gives weight by weight; all children or none in
+    // the mask too (where it leaves the uniform lift out).
+    std::vector<int> weights{gap, kFarRanking, gap};
+    for (int i = 0; i < 9; ++i) weights.push_back(static_cast<int>(rng() % (kFarRanking + 1)));
+    std::vector<std::uint8_t> batch(weights.size());
+    for (const unsigned list_mask : {mask, 0u, 0xFFu}) {
+      keys.symbols(list_mask, weights.data(), weights.size(), occupancy, batch.data());
+      for (std::size_t w = 0; w < weights.size(); ++w) {
+        keys.order(list_mask, weights[w], got);
+        CHECK(batch[w] == ranked_symbol(got, occupancy));
+      }
+    }
     ++cases;
   }
   CHECK(cases == 3000);

@@ -346,8 +346,7 @@ class DepthNodes {
     for (const bool quadric : {false, true}) {
       if (quadric && !causal) break;
       const ChildKeys k = keys_of(node, nb, count, true, quadric, context);
-      for (std::size_t g = 0; g < kGapChoices.size(); ++g)
-        out[(quadric ? kGapChoices.size() : 0) + g] = k.symbol(0u, kGapChoices[g], occupancy);
+      k.symbols(0u, kGapChoices.data(), kGapChoices.size(), occupancy, out.data() + (quadric ? kGapChoices.size() : 0));
     }
     return out;
   }

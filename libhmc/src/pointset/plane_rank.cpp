@@ -294,17 +294,64 @@ void ChildKeys::order(unsigned first_mask, int gap, std::array<int, 8>& order) c
 }
 
 std::uint8_t ChildKeys::symbol(unsigned first_mask, int gap, unsigned occupancy) const {
-  std::array<UInt128, 8> k{};
-  keys(first_mask, gap, k);
-  // An occupied child's rank is the number of children with smaller keys.
-  unsigned ranked = 0;
-  for (unsigned occ = occupancy & 0xFFu; occ != 0; occ &= occ - 1) {
-    const auto c = static_cast<std::size_t>(__builtin_ctz(occ));
-    int rank = 0;
-    for (std::size_t o = 0; o < 8; ++o) rank += k[o] < k[c];
-    ranked |= 1u << rank;
+  std::uint8_t out = 0;
+  symbols(first_mask, &gap, 1, occupancy, &out);
+  return out;
+}
+
+void ChildKeys::symbols(unsigned first_mask, const int* gaps, std::size_t n, unsigned occupancy,
+                        std::uint8_t* out) const {
+  const auto& index = occupancy_order().index;
+  // The keys of keys(): the weight's key, plus 2^112 for the children
+  // outside first_mask. Every key is below 2^113, so when all children or
+  // none are in first_mask the lift is the same for all and changes no
+  // comparison: it is left out.
+  std::array<UInt128, 8> lift{};
+  if ((first_mask & 0xFFu) != 0 && (first_mask & 0xFFu) != 0xFFu)
+    for (std::size_t c = 0; c < 8; ++c)
+      if (!((first_mask >> c) & 1u)) lift[c] = UInt128{1} << 112;
+  std::array<std::size_t, 8> occupied{};
+  std::size_t m = 0;
+  for (unsigned occ = occupancy & 0xFFu; occ != 0; occ &= occ - 1)
+    occupied[m++] = static_cast<std::size_t>(__builtin_ctz(occ));
+  const auto symbol_of = [&](const std::array<UInt128, 8>& k) {
+    unsigned ranked = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const UInt128 kc = k[occupied[i]];
+      int rank = 0;
+      for (std::size_t o = 0; o < 8; ++o) rank += k[o] < kc;
+      ranked |= 1u << rank;
+    }
+    return index[ranked];
+  };
+  // gapped: base_ - step_ * at + lift, for the weight `at` (wrapping as
+  // keys() does: the same residues, so the same keys).
+  std::array<UInt128, 8> gapped{}, other{};
+  for (std::size_t c = 0; c < 8; ++c) gapped[c] = base_[c] + lift[c];
+  int at = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const int gap = gaps[j];
+    if (gap == kFarRanking) {
+      for (std::size_t c = 0; c < 8; ++c) other[c] = far_[c] + lift[c];
+      out[j] = symbol_of(other);
+    } else if (gap > 0 && gapped_) {
+      const int delta = gap - at;
+      if (delta == 1) {
+        for (std::size_t c = 0; c < 8; ++c) gapped[c] -= step_[c];
+      } else if (delta > 0) {
+        const auto times = static_cast<std::uint64_t>(delta);
+        for (std::size_t c = 0; c < 8; ++c) gapped[c] -= step_[c] * times;
+      } else if (delta < 0) {
+        const auto times = static_cast<std::uint64_t>(-delta);
+        for (std::size_t c = 0; c < 8; ++c) gapped[c] += step_[c] * times;
+      }
+      at = gap;
+      out[j] = symbol_of(gapped);
+    } else {
+      for (std::size_t c = 0; c < 8; ++c) other[c] = tie_[c] + lift[c];
+      out[j] = symbol_of(other);
+    }
   }
-  return occupancy_order().index[ranked];
 }
 
 void rank_children(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, unsigned first_mask,

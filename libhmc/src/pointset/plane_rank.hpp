@@ -81,6 +81,10 @@ class ChildKeys {
   /// ranked_symbol() of `occupancy` (not 0) under that ranking, without
   /// sorting: the encoders' trials of several weights.
   std::uint8_t symbol(unsigned first_mask, int gap, unsigned occupancy) const;
+  /// symbol(first_mask, gaps[j], occupancy) into out[j] for j < n: the same
+  /// symbols, with one pass over the children per weight (the gapped keys
+  /// of consecutive weights differ by a small multiple of one step).
+  void symbols(unsigned first_mask, const int* gaps, std::size_t n, unsigned occupancy, std::uint8_t* out) const;
 
  private:
   __extension__ typedef unsigned __int128 UInt128;

@@ -304,8 +304,11 @@ std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 // keeps them: other[i * gaps.size() + j] for the i-th symbol.
 class Traversal {
  public:
+  static constexpr std::size_t kMaxWeights = kFarRanking + 1;  // weights 0 ... kFarRanking, each at most once
+
   Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q, const std::vector<int>& gaps = {})
       : coarse_(coarse), added_(added), q_(q), gaps_(gaps) {
+    if (gaps.size() > kMaxWeights) fail(Status::internal_error, "refinement: too many ranking weights to count");
     counts.assign(gaps.size(), std::vector<std::uint64_t>(static_cast<std::size_t>(q) * 18 * kAlphabet, 0));
     visit(0, 0, 0, coarse.size(), 0, static_cast<std::uint32_t>(added.size()), nullptr);
   }
@@ -357,10 +360,11 @@ class Traversal {
                         ranked_symbol(order, occ), plane_context(split)};
     symbols.push_back(symbol);
     const std::size_t row = (static_cast<std::size_t>(d) * 9 + symbol.weight) * 2 + symbol.plane;
+    std::array<std::uint8_t, kMaxWeights> s{};
+    coarse_.last_keys().symbols(mask, gaps_.data(), gaps_.size(), occ, s.data());
     for (std::size_t j = 0; j < gaps_.size(); ++j) {
-      const std::uint8_t s = coarse_.last_keys().symbol(mask, gaps_[j], occ);
-      ++counts[j][row * kAlphabet + s];
-      other.push_back(s);
+      ++counts[j][row * kAlphabet + s[j]];
+      other.push_back(s[j]);
     }
     if (d + 1 == q_) return;
     for (std::size_t c = 0; c < 8; ++c)
