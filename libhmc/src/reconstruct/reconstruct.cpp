@@ -2,6 +2,8 @@
 #include "reconstruct/reconstruct.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstring>
 #include <iterator>
 #include <string>
 
@@ -30,18 +32,39 @@ std::vector<std::uint64_t> limits(const std::vector<std::uint64_t>& scale, const
 // Candidate flags of the four faces of tetrahedron t (bit k: the face
 // opposite vertex k): a face is a candidate when each of its edges (u, v)
 // has 256·|uv|² <= min(lim[u], lim[v]). Each of the six edges is tested
-// once and shared by its two faces.
+// once and shared by its two faces; the four points and limits are read
+// once.
 unsigned candidate_faces(const std::vector<GridPoint>& pts, const std::vector<std::uint64_t>& lim,
                          const std::array<std::uint32_t, 4>& t) {
+  std::int64_t x[4][3];
+  std::uint64_t l[4];
+  for (std::size_t i = 0; i < 4; ++i) {
+    const GridPoint& p = pts[t[i]];
+    for (std::size_t a = 0; a < 3; ++a) x[i][a] = p[a];
+    l[i] = lim[t[i]];
+  }
   unsigned faces = 0xF;
-  for (int i = 0; i < 4; ++i)
-    for (int j = i + 1; j < 4; ++j) {
-      const std::uint32_t u = t[static_cast<std::size_t>(i)], v = t[static_cast<std::size_t>(j)];
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::size_t j = i + 1; j < 4; ++j) {
+      std::uint64_t d2 = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        const std::int64_t d = x[i][a] - x[j][a];
+        d2 += static_cast<std::uint64_t>(d * d);
+      }
       // The edge lies on the faces opposite the other two vertices.
-      if (256 * dist2(pts[u], pts[v]) > std::min(lim[u], lim[v])) faces &= (1u << i) | (1u << j);
+      if (256 * d2 > std::min(l[i], l[j])) faces &= (1u << i) | (1u << j);
     }
   return faces;
 }
+
+// The four candidate flags of a tetrahedron (bytes 0 or 1, face k at byte
+// k) for each value of candidate_faces(), as the bytes of one 32-bit word.
+constexpr std::array<std::array<std::uint8_t, 4>, 16> kFaceFlags = [] {
+  std::array<std::array<std::uint8_t, 4>, 16> f{};
+  for (std::size_t m = 0; m < 16; ++m)
+    for (std::size_t k = 0; k < 4; ++k) f[m][k] = static_cast<std::uint8_t>((m >> k) & 1u);
+  return f;
+}();
 
 __extension__ typedef unsigned __int128 U128;
 
@@ -736,7 +759,7 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
   split_range(helpers, nt, kSplitElements, [&](std::size_t begin, std::size_t end) {
     for (std::size_t t = begin; t < end; ++t) {
       const unsigned faces = candidate_faces(points, lim, dt.tets[t]);
-      for (int k = 0; k < 4; ++k) cand[t * 4 + static_cast<std::size_t>(k)] = (faces >> k) & 1u;
+      std::memcpy(cand.data() + t * 4, kFaceFlags[faces].data(), 4);
     }
   });
   bool any_filter = false;
