@@ -565,7 +565,7 @@ TEST_CASE("the candidate filters give the plainly written rule's labels") {
     while (s.size() < 300) s.insert({c(rng), c(rng), c(rng) / 8});  // flattened: slivers and needles
     sets.emplace_back(s.begin(), s.end());
   }
-  int compared = 0, differing_from_unfiltered = 0;
+  int compared = 0, differing_from_unfiltered = 0, reused = 0;
   for (auto& pts : sets) {
     std::sort(pts.begin(), pts.end());
     pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
@@ -580,6 +580,10 @@ TEST_CASE("the candidate filters give the plainly written rule's labels") {
     // Neighbour ratios above 256 remove a face unless some neighbour is much
     // flatter than it: a face compared with itself would always fail.
     const std::array<std::uint32_t, kFilterCount> strong{256, 64, 512, 1, 1024, 75};
+    // A FilterMemo per alpha table, as the encoder's filter trials keep one:
+    // reused where only the neighbour filters change (8 -> 16 -> 32),
+    // recomputed where filters (a)-(c) or the edge test change.
+    FilterMemo memos[2], shared;  // shared: both tables in turn, so never reused across them
     for (int mask : {1, 2, 4, 8, 16, 32, 3, 12, 48, 21, 42, 63}) {  // each filter alone, pairs, all
       for (std::uint32_t scale_up : {1u, 4u}) {
         ReconParams p = base;
@@ -598,12 +602,27 @@ TEST_CASE("the candidate filters give the plainly written rule's labels") {
         CHECK(flags == plain.candidates);
         const auto got = rule_labels(pts, dt, scale, p);
         CHECK(got == plain.inside);
+        FilterMemo& memo = memos[scale_up == 4 ? 1 : 0];
+        CHECK(candidate_flags(pts, dt, scale, p, nullptr, &memo) == plain.candidates);
+        CHECK(candidate_flags(pts, dt, scale, p, nullptr, &shared) == plain.candidates);
+        if (mask == 16 || mask == 32) {
+          // The memo is read, not recomputed: one that claims no face has a
+          // neighbour leaves every face to the neighbour filters.
+          FilterMemo lonely = memo;
+          std::fill(lonely.has.begin(), lonely.has.end(), std::uint8_t{0});
+          const auto flags_lonely = candidate_flags(pts, dt, scale, p, nullptr, &lonely);
+          reused += flags_lonely != plain.candidates;
+        }
+        std::vector<std::uint8_t> cand;
+        CHECK(rule_labels(pts, dt, scale, p, &cand, nullptr, &memo) == plain.inside);
+        CHECK(cand == plain.candidates);
         ++compared;
         differing_from_unfiltered += flags != unfiltered_flags;
       }
     }
   }
   CHECK(compared == 3 * 12 * 2);
+  CHECK(reused == 3 * 2 * 2);  // 16 and 32, both tables, the three sets: the memo decided
   CHECK(differing_from_unfiltered > compared * 3 / 4);  // the filters do remove candidates
 }
 

@@ -140,162 +140,186 @@ bool radius_below(const FaceRadius& a, const FaceRadius& b) {
 
 // The candidate filters of spec 11.2a, applied to the faces that passed
 // the edge test. `cand` is indexed by 4·tet + local face and is updated on
-// both sides of every face.
+// both sides of every face. `memo` (FilterMemo, or null): what the neighbour
+// filters (d)-(f) are computed from, reused when it was made from the same
+// edge-test flags, (a)-(c) thresholds and scale, else computed into it.
 void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& dt,
                    const std::vector<std::uint64_t>& scale, const ReconParams& p, std::vector<std::uint8_t>& cand,
-                   HelperBudget* helpers) {
+                   HelperBudget* helpers, FilterMemo* memo) {
   const auto& th = p.filters;
   const std::size_t nt = dt.tets.size();
-  // Unique faces from the adjacency: a face is listed at the first of its
-  // slots, in (tetrahedron, local face) order, with its twin slot across it.
-  // Both slots of a face pass or fail the edge test together (same edges,
-  // same limits), so a face whose neighbour comes first was listed there.
-  // Its vertices are kept as the sorted triple. Everything below depends on
-  // the faces' values, not on the order of their ids.
-  std::vector<std::array<std::uint32_t, 3>> faces;
-  std::vector<std::array<std::uint32_t, 2>> face_slots;  // slot, twin slot (or ~0)
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k) {
-      const std::size_t s = t * 4 + static_cast<std::size_t>(k);
-      if (!cand[s]) continue;
-      const std::uint32_t u = dt.neighbors[t][k];
-      if (u != kNoTet && u < t) continue;  // listed from u
-      std::uint32_t twin = ~0u;
-      if (u != kNoTet) {
-        int m = 0;
-        while (m < 3 && dt.neighbors[u][m] != t) ++m;
-        twin = static_cast<std::uint32_t>(std::size_t{u} * 4 + static_cast<std::size_t>(m));
-      }
-      auto f = face_of(dt, t, k);
-      std::sort(f.begin(), f.end());
-      faces.push_back(f);
-      face_slots.push_back({static_cast<std::uint32_t>(s), twin});
-    }
-  const std::size_t nf = faces.size();
+  const bool neighbours = th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio];
+  const bool per_face = th[kCircleRadius] || th[kEdgeRatio] || th[kDensity];
+  const std::array<std::uint32_t, 3> face_thresholds{th[kCircleRadius], th[kEdgeRatio], th[kDensity]};
+  FilterMemo local;
+  FilterMemo& store = memo && neighbours ? *memo : local;
+  const bool reuse = &store == memo && store.valid && store.face_thresholds == face_thresholds && store.cand == cand &&
+                     (!per_face || store.scale == scale);
+  auto& faces = store.faces;
+  auto& face_slots = store.face_slots;  // slot, twin slot (or ~0)
+  auto& keep = store.keep;              // the faces that (a)-(c) keep
+  auto& has = store.has;
+  auto& max_r = store.max_r;
+  auto& max_ratio = store.max_ratio;
   // A face's parts are recomputed from its vertices whenever they are
   // needed (a few products): storing them would cost 48 bytes per face,
   // four times the face itself, at the moment of a decoder's peak.
   auto parts = [&](std::uint32_t i) { return parts_of(pts, faces[i]); };
-  std::vector<std::uint8_t> keep(nf, 1);
-  // (a) to (c) test each face on its own (none of them set: every face kept).
-  if (th[kCircleRadius] || th[kEdgeRatio] || th[kDensity]) {
-    split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i) {
-        const auto& f = faces[i];
-        const TriangleParts t = parts_of(pts, f);
-        const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
-        const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
-        // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
-        if (th[kCircleRadius] &&
-            compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
-          keep[i] = 0;
-        // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
-        if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
-        // (c) density: 256·D <= T·s² (a face much larger than the local spacing squared).
-        if (th[kDensity] &&
-            compare(U256::from(256).mul(hi(t.d), lo(t.d)), U256::from(smin).mul(smin).mul(th[kDensity])) > 0)
-          keep[i] = 0;
-      }
-    });
-  }
-  // Edge adjacency among the faces kept so far, for the neighbour filters.
-  const bool neighbours = th[kLone] || th[kNeighbourRadius] || th[kNeighbourRatio];
-  if (neighbours) {
-    // A reference is the edge (a, b), a < b, and a face on it, packed as
-    // a·2^(wv + wf) + b·2^wf + face when that fits in 64 bits (8 bytes, one
-    // integer sort), else as three words.
-    struct EdgeRef {
-      std::uint32_t a, b, face;
-    };
-    int wv = 1, wf = 1;
-    while (wv < 32 && ((pts.size() - 1) >> wv) != 0) ++wv;
-    while (wf < 32 && ((nf - 1) >> wf) != 0) ++wf;
-    const bool packed = 2 * wv + wf <= 64;
-    std::vector<std::uint64_t> keys;
-    std::vector<EdgeRef> wide;
-    const auto kept = static_cast<std::size_t>(std::count(keep.begin(), keep.end(), std::uint8_t{1}));
-    if (packed)
-      keys.reserve(3 * kept);
-    else
-      wide.reserve(3 * kept);
-    for (std::uint32_t i = 0; i < nf; ++i) {
-      if (!keep[i]) continue;
-      const auto& f = faces[i];
-      for (int a = 0; a < 3; ++a)
-        for (int b = a + 1; b < 3; ++b) {
-          if (packed)
-            keys.push_back(std::uint64_t{f[a]} << (wv + wf) | std::uint64_t{f[b]} << wf | i);
-          else
-            wide.push_back({f[a], f[b], i});
-        }
+  if (!reuse) {
+    if (&store == memo) {
+      store.valid = true;
+      store.face_thresholds = face_thresholds;
+      store.cand = cand;
+      store.scale = per_face ? scale : std::vector<std::uint64_t>{};
     }
-    if (packed) {
-      std::sort(keys.begin(), keys.end());
-    } else {
-      std::sort(wide.begin(), wide.end(), [](const EdgeRef& x, const EdgeRef& y) {
-        return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.face < y.face;
+    faces.clear();
+    face_slots.clear();
+    // Unique faces from the adjacency: a face is listed at the first of its
+    // slots, in (tetrahedron, local face) order, with its twin slot across it.
+    // Both slots of a face pass or fail the edge test together (same edges,
+    // same limits), so a face whose neighbour comes first was listed there.
+    // Its vertices are kept as the sorted triple. Everything below depends on
+    // the faces' values, not on the order of their ids.
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k) {
+        const std::size_t s = t * 4 + static_cast<std::size_t>(k);
+        if (!cand[s]) continue;
+        const std::uint32_t u = dt.neighbors[t][k];
+        if (u != kNoTet && u < t) continue;  // listed from u
+        std::uint32_t twin = ~0u;
+        if (u != kNoTet) {
+          int m = 0;
+          while (m < 3 && dt.neighbors[u][m] != t) ++m;
+          twin = static_cast<std::uint32_t>(std::size_t{u} * 4 + static_cast<std::size_t>(m));
+        }
+        auto f = face_of(dt, t, k);
+        std::sort(f.begin(), f.end());
+        faces.push_back(f);
+        face_slots.push_back({static_cast<std::uint32_t>(s), twin});
+      }
+    const std::size_t nf = faces.size();
+    keep.assign(nf, 1);
+    // (a) to (c) test each face on its own (none of them set: every face kept).
+    if (th[kCircleRadius] || th[kEdgeRatio] || th[kDensity]) {
+      split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          const auto& f = faces[i];
+          const TriangleParts t = parts_of(pts, f);
+          const std::uint64_t smin = std::min({scale[f[0]], scale[f[1]], scale[f[2]]});
+          const std::uint64_t emax = std::max({t.e[0], t.e[1], t.e[2]}), emin = std::min({t.e[0], t.e[1], t.e[2]});
+          // (a) circle radius: 256·R² <= T·s, i.e. 256·N <= T·s·4D.
+          if (th[kCircleRadius] &&
+              compare(t.num().mul(256), U256::from(smin).mul(4ull * th[kCircleRadius]).mul(hi(t.d), lo(t.d))) > 0)
+            keep[i] = 0;
+          // (b) min/max edge ratio: 256·Lmin² >= T·Lmax².
+          if (th[kEdgeRatio] && static_cast<U128>(emin) * 256 < static_cast<U128>(emax) * th[kEdgeRatio]) keep[i] = 0;
+          // (c) density: 256·D <= T·s² (a face much larger than the local spacing squared).
+          if (th[kDensity] &&
+              compare(U256::from(256).mul(hi(t.d), lo(t.d)), U256::from(smin).mul(smin).mul(th[kDensity])) > 0)
+            keep[i] = 0;
+        }
       });
     }
-    const std::size_t nrefs = packed ? keys.size() : wide.size();
-    auto ref = [&](std::size_t r) -> EdgeRef {
-      if (!packed) return wide[r];
-      const std::uint64_t x = keys[r];
-      return {static_cast<std::uint32_t>(x >> (wv + wf)),
-              static_cast<std::uint32_t>((x >> wf) & ((std::uint64_t{1} << wv) - 1)),
-              static_cast<std::uint32_t>(x & ((std::uint64_t{1} << wf) - 1))};
-    };
-    // For each face: does it have a neighbour, the largest neighbour R² and
-    // the largest neighbour edge ratio (as fractions compared exactly).
-    std::vector<std::uint8_t> has(nf, 0);
-    std::vector<std::uint32_t> max_r(nf, ~0u), max_ratio(nf, ~0u);
-    auto ratio_less = [](const TriangleParts& a, const TriangleParts& b) {  // Lmin²/Lmax² of a < of b
-      const auto& x = a.e;
-      const auto& y = b.e;
-      const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
-      const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
-      return xn * yd < yn * xd;
-    };
-    std::vector<FaceRadius> group;      // the faces on one edge
-    std::vector<std::uint32_t> around;  // their ids
-    for (std::size_t i = 0; i < nrefs;) {
-      const EdgeRef first = ref(i);
-      std::size_t j = i;
-      around.clear();
-      for (; j < nrefs; ++j) {
-        const EdgeRef e = ref(j);
-        if (e.a != first.a || e.b != first.b) break;
-        around.push_back(e.face);
+    // Edge adjacency among the faces kept so far, for the neighbour filters.
+    if (neighbours) {
+      // A reference is the edge (a, b), a < b, and a face on it, packed as
+      // a·2^(wv + wf) + b·2^wf + face when that fits in 64 bits (8 bytes, one
+      // integer sort), else as three words.
+      struct EdgeRef {
+        std::uint32_t a, b, face;
+      };
+      int wv = 1, wf = 1;
+      while (wv < 32 && ((pts.size() - 1) >> wv) != 0) ++wv;
+      while (wf < 32 && ((nf - 1) >> wf) != 0) ++wf;
+      const bool packed = 2 * wv + wf <= 64;
+      std::vector<std::uint64_t> keys;
+      std::vector<EdgeRef> wide;
+      const auto kept = static_cast<std::size_t>(std::count(keep.begin(), keep.end(), std::uint8_t{1}));
+      if (packed)
+        keys.reserve(3 * kept);
+      else
+        wide.reserve(3 * kept);
+      for (std::uint32_t i = 0; i < nf; ++i) {
+        if (!keep[i]) continue;
+        const auto& f = faces[i];
+        for (int a = 0; a < 3; ++a)
+          for (int b = a + 1; b < 3; ++b) {
+            if (packed)
+              keys.push_back(std::uint64_t{f[a]} << (wv + wf) | std::uint64_t{f[b]} << wf | i);
+            else
+              wide.push_back({f[a], f[b], i});
+          }
       }
-      const std::size_t g = j - i;
-      if (g > 1) {
-        group.clear();
-        for (std::uint32_t f : around) group.push_back(face_radius(pts, faces[f]));
-        // A face's best neighbour around this edge is the first largest
-        // among the others: the first largest of all (r1, q1), or for that
-        // face itself the first largest of the rest (r2, q2).
-        std::size_t r1 = 0, q1 = 0, r2 = g, q2 = g;
-        for (std::size_t b = 1; b < g; ++b) {
-          if (radius_below(group[r1], group[b])) r1 = b;
-          if (ratio_less(group[q1].p, group[b].p)) q1 = b;
-        }
-        for (std::size_t b = 0; b < g; ++b) {
-          if (b != r1 && (r2 == g || radius_below(group[r2], group[b]))) r2 = b;
-          if (b != q1 && (q2 == g || ratio_less(group[q2].p, group[b].p))) q2 = b;
-        }
-        for (std::size_t a = 0; a < g; ++a) {
-          const std::uint32_t f = around[a];
-          has[f] = 1;
-          // Then against the best so far.
-          const std::size_t br = a == r1 ? r2 : r1, bq = a == q1 ? q2 : q1;
-          if (max_r[f] == ~0u || radius_below(face_radius(pts, faces[max_r[f]]), group[br])) max_r[f] = around[br];
-          if (max_ratio[f] == ~0u || ratio_less(parts(max_ratio[f]), group[bq].p)) max_ratio[f] = around[bq];
-        }
+      if (packed) {
+        std::sort(keys.begin(), keys.end());
+      } else {
+        std::sort(wide.begin(), wide.end(), [](const EdgeRef& x, const EdgeRef& y) {
+          return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.face < y.face;
+        });
       }
-      i = j;
+      const std::size_t nrefs = packed ? keys.size() : wide.size();
+      auto ref = [&](std::size_t r) -> EdgeRef {
+        if (!packed) return wide[r];
+        const std::uint64_t x = keys[r];
+        return {static_cast<std::uint32_t>(x >> (wv + wf)),
+                static_cast<std::uint32_t>((x >> wf) & ((std::uint64_t{1} << wv) - 1)),
+                static_cast<std::uint32_t>(x & ((std::uint64_t{1} << wf) - 1))};
+      };
+      // For each face: does it have a neighbour, the largest neighbour R² and
+      // the largest neighbour edge ratio (as fractions compared exactly).
+      has.assign(nf, 0);
+      max_r.assign(nf, ~0u);
+      max_ratio.assign(nf, ~0u);
+      auto ratio_less = [](const TriangleParts& a, const TriangleParts& b) {  // Lmin²/Lmax² of a < of b
+        const auto& x = a.e;
+        const auto& y = b.e;
+        const U128 xn = std::min({x[0], x[1], x[2]}), xd = std::max({x[0], x[1], x[2]});
+        const U128 yn = std::min({y[0], y[1], y[2]}), yd = std::max({y[0], y[1], y[2]});
+        return xn * yd < yn * xd;
+      };
+      std::vector<FaceRadius> group;      // the faces on one edge
+      std::vector<std::uint32_t> around;  // their ids
+      for (std::size_t i = 0; i < nrefs;) {
+        const EdgeRef first = ref(i);
+        std::size_t j = i;
+        around.clear();
+        for (; j < nrefs; ++j) {
+          const EdgeRef e = ref(j);
+          if (e.a != first.a || e.b != first.b) break;
+          around.push_back(e.face);
+        }
+        const std::size_t g = j - i;
+        if (g > 1) {
+          group.clear();
+          for (std::uint32_t f : around) group.push_back(face_radius(pts, faces[f]));
+          // A face's best neighbour around this edge is the first largest
+          // among the others: the first largest of all (r1, q1), or for that
+          // face itself the first largest of the rest (r2, q2).
+          std::size_t r1 = 0, q1 = 0, r2 = g, q2 = g;
+          for (std::size_t b = 1; b < g; ++b) {
+            if (radius_below(group[r1], group[b])) r1 = b;
+            if (ratio_less(group[q1].p, group[b].p)) q1 = b;
+          }
+          for (std::size_t b = 0; b < g; ++b) {
+            if (b != r1 && (r2 == g || radius_below(group[r2], group[b]))) r2 = b;
+            if (b != q1 && (q2 == g || ratio_less(group[q2].p, group[b].p))) q2 = b;
+          }
+          for (std::size_t a = 0; a < g; ++a) {
+            const std::uint32_t f = around[a];
+            has[f] = 1;
+            // Then against the best so far.
+            const std::size_t br = a == r1 ? r2 : r1, bq = a == q1 ? q2 : q1;
+            if (max_r[f] == ~0u || radius_below(face_radius(pts, faces[max_r[f]]), group[br])) max_r[f] = around[br];
+            if (max_ratio[f] == ~0u || ratio_less(parts(max_ratio[f]), group[bq].p)) max_ratio[f] = around[bq];
+          }
+        }
+        i = j;
+      }
     }
-    std::vector<std::uint64_t>().swap(keys);
-    std::vector<EdgeRef>().swap(wide);
-    std::vector<std::uint8_t> next = keep;
+  }
+  const std::size_t nf = faces.size();
+  std::vector<std::uint8_t> next = keep;
+  if (neighbours) {
     split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
       for (auto f = static_cast<std::uint32_t>(begin); f < end; ++f) {
         if (!keep[f]) continue;
@@ -326,10 +350,9 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
         }
       }
     });
-    keep.swap(next);
   }
   for (std::size_t f = 0; f < nf; ++f)
-    if (!keep[f])
+    if (!next[f])
       for (std::uint32_t slot : face_slots[f])
         if (slot != ~0u) cand[slot] = 0;
 }
@@ -752,7 +775,7 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
 
 std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                           const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                          HelperBudget* helpers) {
+                                          HelperBudget* helpers, FilterMemo* memo) {
   const std::size_t nt = dt.tets.size();
   const auto lim = limits(scale, p);
   std::vector<std::uint8_t> cand(nt * 4);
@@ -764,18 +787,19 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
   });
   bool any_filter = false;
   for (auto f : p.filters) any_filter |= f != 0;
-  if (any_filter) apply_filters(points, dt, scale, p, cand, helpers);
+  if (any_filter) apply_filters(points, dt, scale, p, cand, helpers, memo);
   return cand;
 }
 
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                      std::vector<std::uint8_t>* cand_out, HelperBudget* helpers) {
+                                      std::vector<std::uint8_t>* cand_out, HelperBudget* helpers,
+                                      FilterMemo* memo) {
   const std::size_t nt = dt.tets.size();
   std::vector<std::uint8_t> inside(nt, 1);
   std::vector<std::uint8_t> own;
   std::vector<std::uint8_t>& cand = cand_out ? *cand_out : own;
-  cand = candidate_flags(points, dt, scale, p, helpers);
+  cand = candidate_flags(points, dt, scale, p, helpers, memo);
 
   // Flood from outside the hull through non-candidate faces.
   std::vector<std::uint32_t> stack;

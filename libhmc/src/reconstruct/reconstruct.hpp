@@ -90,19 +90,39 @@ struct Reconstruction {
 std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        std::uint32_t rank, HelperBudget* helpers = nullptr);
 
+/// What the neighbour filters (spec 11.2a d-f) are computed from: the faces
+/// that pass the edge test and filters (a)-(c), and each one's neighbours
+/// of largest circumradius and of largest edge ratio. It does not depend on
+/// the neighbour filters' thresholds, so an encoder trying several of them
+/// on one level passes one FilterMemo to each of those calls (same points,
+/// same tetrahedralization, one call at a time): a call whose edge-test
+/// flags, (a)-(c) thresholds and (where those are set) scale match the
+/// memo's reuses it, any other recomputes it. The flags come out the same.
+struct FilterMemo {
+  bool valid = false;
+  std::vector<std::uint8_t> cand;                  // the edge test's flags
+  std::array<std::uint32_t, 3> face_thresholds{};  // filters (a)-(c)
+  std::vector<std::uint64_t> scale;                // when (a)-(c) are set
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  std::vector<std::array<std::uint32_t, 2>> face_slots;
+  std::vector<std::uint8_t> keep, has;
+  std::vector<std::uint32_t> max_r, max_ratio;
+};
+
 /// Candidate flag of every face slot, indexed 4·tetrahedron + local face:
 /// the edge test against the alpha limits (spec 11.2) and the filters
-/// (11.2a). Both slots of a face carry the same flag.
+/// (11.2a). Both slots of a face carry the same flag. `memo`: FilterMemo.
 std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                           const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                          HelperBudget* helpers = nullptr);
+                                          HelperBudget* helpers = nullptr, FilterMemo* memo = nullptr);
 
 /// The labels of the rule before toggles (flood from the hull through
 /// non-candidate faces, then peeling); `cand`, when given, receives the
 /// candidate flags (candidate_flags()).
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                      std::vector<std::uint8_t>* cand = nullptr, HelperBudget* helpers = nullptr);
+                                      std::vector<std::uint8_t>* cand = nullptr, HelperBudget* helpers = nullptr,
+                                      FilterMemo* memo = nullptr);
 
 /// The normative repair step (spec 11.4a) on rule labels: greedy local
 /// flips around unsound vertices (surface kind: points off the surface;

@@ -525,9 +525,12 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // and dropped: more classes, more side bits than fidelity exact (bunny
   // 1.53 against 1.10 bits per point) for 93 % of fertility's triangles
   // instead of 90 %, where exact gives 99.9 %.
-  auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale, std::vector<std::uint8_t>& labels) {
+  // `memo` (FilterMemo): only for calls made one at a time (the trials
+  // evaluated on two threads have no filters).
+  auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale, std::vector<std::uint8_t>& labels,
+                  FilterMemo* memo = nullptr) {
     std::vector<std::uint8_t> cand;
-    labels = rule_labels(points, dt, scale, p, &cand);
+    labels = rule_labels(points, dt, scale, p, &cand, nullptr, memo);
     if (p.repair) {
       repair_labels(dt, kind, labels);
       const std::uint64_t m = approximation_penalty(dt, labels, want_all, in);
@@ -709,6 +712,9 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   }
   // The thesis' filters (§2.3.2): keep each one that makes the corrections
   // of what the rule gets wrong cheaper (coarser levels repair instead).
+  // The trials of the neighbour filters (and the candidates of the chosen
+  // parameters, below) share those filters' face data.
+  FilterMemo memo;
   {
     const auto& scale = best_scale;
     std::uint64_t current = best_mismatch, current_bits = best_correction_bits;  // cost(best, scale), known
@@ -719,7 +725,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
       if (current == 0) break;    // nothing left for a filter to mend
       ReconParams p = best;
       p.filters[static_cast<std::size_t>(id)] = threshold;
-      const auto [c, c_bits] = cost(p, scale, trial);
+      const auto [c, c_bits] = cost(p, scale, trial, &memo);
       if (c_bits < current_bits) {
         current = c;
         current_bits = c_bits;
@@ -821,7 +827,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     // many of a tetrahedron's faces are candidates (on the 1-level streams of
     // the shared models, the toggles of the skull, horse and bunny cost 29 to
     // 42 % less).
-    auto cand = candidate_flags(points, dt, best_scale, best);
+    auto cand = candidate_flags(points, dt, best_scale, best, nullptr, &memo);
     auto coding = code_toggles(dt, rule, list, cand);
     best.toggle_ranks = std::move(coding.ranks);
     best.candidate_contexts = coding.by_candidates;
