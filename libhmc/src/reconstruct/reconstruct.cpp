@@ -200,7 +200,7 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     const std::size_t nf = faces.size();
     keep.assign(nf, 1);
     // (a) to (c) test each face on its own (none of them set: every face kept).
-    if (th[kCircleRadius] || th[kEdgeRatio] || th[kDensity]) {
+    if (per_face) {
       split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
           const auto& f = faces[i];
@@ -318,8 +318,11 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
     }
   }
   const std::size_t nf = faces.size();
-  std::vector<std::uint8_t> next = keep;
+  // The faces kept in the end: keep, less those the neighbour filters drop
+  // (written to a copy: a memo's keep must stay as (a)-(c) left it).
+  std::vector<std::uint8_t> next;
   if (neighbours) {
+    next = keep;
     split_range(helpers, nf, kSplitElements, [&](std::size_t begin, std::size_t end) {
       for (auto f = static_cast<std::uint32_t>(begin); f < end; ++f) {
         if (!keep[f]) continue;
@@ -351,8 +354,9 @@ void apply_filters(const std::vector<GridPoint>& pts, const Tetrahedralization& 
       }
     });
   }
+  const std::vector<std::uint8_t>& kept = neighbours ? next : keep;
   for (std::size_t f = 0; f < nf; ++f)
-    if (!next[f])
+    if (!kept[f])
       for (std::uint32_t slot : face_slots[f])
         if (slot != ~0u) cand[slot] = 0;
 }
