@@ -956,6 +956,62 @@ TEST_CASE("compact RCON: toggles by candidate contexts decode to the same mesh a
   CHECK(payload_status(bytes, e.points.size()) == Status::bad_layer);
 }
 
+TEST_CASE("toggle contexts are spec 11.5's, read plainly") {
+  // Random points in a cube, labels of three kinds (random, the rule's,
+  // every tetrahedron inside: hull faces on the interface) and random
+  // candidate flags; every combination of the optional contexts.
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<std::uint32_t> c(0, 255);
+  std::set<GridPoint> s;
+  while (s.size() < 400) s.insert({c(rng), c(rng), c(rng)});
+  const std::vector<GridPoint> pts(s.begin(), s.end());
+  const auto dt = delaunay(pts);
+  const std::size_t nt = dt.tets.size();
+  REQUIRE(nt > 1000);
+  std::vector<std::uint8_t> cand(4 * nt);
+  for (auto& f : cand) f = static_cast<std::uint8_t>(rng() % 2);
+  std::vector<std::vector<std::uint8_t>> labelings(3);
+  for (std::size_t t = 0; t < nt; ++t) labelings[0].push_back(static_cast<std::uint8_t>(rng() % 2));
+  labelings[1] = rule_labels(pts, dt, local_scale(pts, dt, 6), ReconParams{});
+  labelings[2].assign(nt, 1);
+  std::set<int> seen;
+  for (const auto& inside : labelings) {
+    // f(t), and the points on the interface.
+    std::vector<int> f(nt, 0);
+    std::vector<bool> on(pts.size(), false);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k) {
+        const std::uint32_t u = dt.neighbors[t][k];
+        if (u == kNoTet ? inside[t] == 1 : inside[u] != inside[t]) {
+          ++f[t];
+          for (int j = 0; j < 3; ++j) on[dt.tets[t][kFaceVertices[k][j]]] = true;
+        }
+      }
+    for (const bool by_cand : {false, true})
+      for (const bool by_vertices : {false, true}) {
+        CAPTURE(by_cand);
+        CAPTURE(by_vertices);
+        const auto ctx = toggle_contexts(dt, inside, by_cand ? &cand : nullptr, by_vertices);
+        REQUIRE(ctx.size() == nt);
+        std::size_t wrong = 0;
+        for (std::size_t t = 0; t < nt; ++t) {
+          int want = 4 * inside[t] + std::min(f[t], 3);
+          if (by_cand) want += 8 * (cand[4 * t] + cand[4 * t + 1] + cand[4 * t + 2] + cand[4 * t + 3]);
+          const auto& T = dt.tets[t];
+          if (by_vertices && on[T[0]] && on[T[1]] && on[T[2]] && on[T[3]]) want += 40;
+          wrong += ctx[t] != want;
+          seen.insert(want);
+        }
+        CHECK(wrong == 0);
+      }
+  }
+  // The cases the contexts separate all occur: hull faces, every count of
+  // interface faces and of candidates, and tetrahedra on the interface.
+  CHECK(seen.count(4 + 3) == 1);
+  CHECK(seen.count(8 * 4 + 4 + 2) == 1);
+  CHECK(std::count_if(seen.begin(), seen.end(), [](int x) { return x >= 40; }) > 10);
+}
+
 TEST_CASE("compact RCON: a class list where one class holds nearly every point, and its errors") {
   std::uint64_t seed = 11;
   auto next = [&]() { return seed = seed * 6364136223846793005ull + 1442695040888963407ull, seed >> 33; };

@@ -975,42 +975,53 @@ Reconstruction extract(const Tetrahedralization& dt, Kind kind, const std::vecto
 std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const std::vector<std::uint8_t>& inside,
                                           const std::vector<std::uint8_t>* cand, bool vertices) {
   const std::size_t nt = dt.tets.size();
+  // The labels with one more entry, 0 (outside), at index nt, where every
+  // hull face leads: a hull face of an inside tetrahedron is then a face
+  // between labels like any other, and the loop below has no branch.
+  std::vector<std::uint8_t> label(inside.begin(), inside.begin() + static_cast<std::ptrdiff_t>(nt));
+  label.push_back(0);
+  const auto past = static_cast<std::uint32_t>(nt);
   // Bit k of faces[t]: face k of t is on the interface (shared with a
   // tetrahedron of the other label, or a hull face of an inside one);
   // looked up once, for both uses below.
   std::vector<std::uint8_t> faces(nt);
-  std::uint32_t top = 0;  // the number of points the tetrahedra use
   for (std::size_t t = 0; t < nt; ++t) {
+    const auto& nb = dt.neighbors[t];
+    const std::uint8_t own = label[t];
     unsigned m = 0;
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      if (u == kNoTet ? inside[t] != 0 : inside[u] != inside[t]) m |= 1u << k;
-    }
+    for (int k = 0; k < 4; ++k) m |= static_cast<unsigned>(label[std::min(nb[k], past)] != own) << k;
     faces[t] = static_cast<std::uint8_t>(m);
-    if (vertices)
-      for (auto v : dt.tets[t]) top = std::max(top, v + 1);
   }
   // Points on the interface (spec 11.4a), when the contexts need them.
   std::vector<std::uint8_t> on;
   if (vertices) {
-    on.assign(top, 0);
+    // One past the largest vertex index (a loop that vectorizes).
+    const std::uint32_t* index = dt.tets.empty() ? nullptr : dt.tets[0].data();
+    std::uint32_t top = 0;
+    for (std::size_t i = 0; i < 4 * nt; ++i) top = std::max(top, index[i]);
+    on.assign(nt ? std::size_t{top} + 1 : 0, 0);
     for (std::size_t t = 0; t < nt; ++t)
       for (unsigned m = faces[t]; m != 0; m &= m - 1) {
         const int k = __builtin_ctz(m);
         for (int j = 0; j < 3; ++j) on[dt.tets[t][kFaceVertices[k][j]]] = 1;
       }
   }
+  static constexpr std::uint8_t kOnFaces[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 3};  // min(3, set bits)
   std::vector<std::uint8_t> ctx(nt);
   for (std::size_t t = 0; t < nt; ++t) {
-    int candidates = 0, points_on = 0;
-    for (int k = 0; k < 4; ++k) {
-      if (cand) candidates += (*cand)[4 * t + static_cast<std::size_t>(k)];
-      if (vertices) points_on += on[dt.tets[t][k]];
+    unsigned c = 4u * label[t] + kOnFaces[faces[t]];
+    if (cand) {
+      // Four flags of 0 or 1, one byte each: their sum is the top byte of
+      // the word times 0x01010101.
+      std::uint32_t w;
+      std::memcpy(&w, cand->data() + 4 * t, 4);
+      c += kLabelContexts * ((w * 0x01010101u) >> 24);
     }
-    static constexpr int kCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};  // set bits of 0-15
-    const int on_faces = kCount[faces[t]];
-    ctx[t] = static_cast<std::uint8_t>((points_on == 4 ? kCandidateContexts : 0) + kLabelContexts * candidates +
-                                       4 * inside[t] + std::min(on_faces, 3));
+    if (vertices) {
+      const auto& T = dt.tets[t];
+      if (on[T[0]] & on[T[1]] & on[T[2]] & on[T[3]]) c += kCandidateContexts;
+    }
+    ctx[t] = static_cast<std::uint8_t>(c);
   }
   return ctx;
 }
