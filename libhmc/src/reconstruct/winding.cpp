@@ -2,7 +2,10 @@
 #include "reconstruct/winding.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <numeric>
 
 #include "delaunay/predicates.hpp"
@@ -367,14 +370,32 @@ std::optional<int> ClosedSurface::jump(const Point& p, const Point& q) const {
   const Box& root = boxes_[1];
   bool slab = false;
   for (int a = 0; a < 3; ++a) slab = slab || (hi[a] - lo[a]) * 16 > std::int64_t{root.hi[a]} - root.lo[a];
+  // The bounding-box test of a box, its three axes at once: (lo, hi[0]) and
+  // (hi, begin) as four lanes each; the fourth lanes compare against the
+  // extremes and never fail. Box corners are int32 and not negative, so the
+  // segment's bounds clamped to int32 give the same answers.
+  typedef std::int32_t Lanes __attribute__((vector_size(16)));
+  static_assert(offsetof(Box, hi) == offsetof(Box, lo) + 12 && sizeof(Box) >= offsetof(Box, hi) + 16,
+                "a box's lo and hi are loaded as four lanes each");
+  auto narrow = [](std::int64_t x) {
+    return static_cast<std::int32_t>(std::clamp<std::int64_t>(x, INT32_MIN, INT32_MAX));
+  };
+  const Lanes seg_hi{narrow(hi[0]), narrow(hi[1]), narrow(hi[2]), INT32_MAX};
+  const Lanes seg_lo{narrow(lo[0]), narrow(lo[1]), narrow(lo[2]), INT32_MIN};
+  auto apart = [&](const Box& b) {
+    Lanes l, h;
+    std::memcpy(&l, b.lo.data(), sizeof l);
+    std::memcpy(&h, b.hi.data(), sizeof h);
+    const Lanes out = (l > seg_hi) | (h < seg_lo);
+    return (out[0] | out[1] | out[2]) != 0;
+  };
   int total = 0;
   std::uint32_t stack[64];
   int top = 0;
   stack[top++] = 1;
   while (top > 0) {
     const Box& b = boxes_[stack[--top]];
-    if (b.lo[0] > hi[0] || b.hi[0] < lo[0] || b.lo[1] > hi[1] || b.hi[1] < lo[1] || b.lo[2] > hi[2] || b.hi[2] < lo[2])
-      continue;
+    if (apart(b)) continue;
     if (slab && !meets(b)) continue;
     if (b.left != 0) {
       stack[top++] = b.left;
