@@ -8,6 +8,7 @@
 
 #include "entropy/huffman.hpp"
 #include "entropy/paired.hpp"
+#include "entropy/rice.hpp"
 
 using namespace hmc;
 using namespace hmc::detail;
@@ -397,4 +398,35 @@ TEST_CASE("paired tables: a pair code that gives the escape is followed by the e
   // Not flagged: the first bit is the table's own (here: a one-symbol code).
   BitReader plain(bytes.data(), bytes.size(), "test");
   CHECK_FALSE(TableCode::read(plain, 255, false, "t", TableForm::deltas).paired());
+}
+
+TEST_CASE("the Rice parameter chosen is the first of the fewest bits, as trying all 32 finds") {
+  std::mt19937_64 rng(31);
+  int lists = 0, nonzero_k = 0, high_k = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    // Gaps of one scale (a list over a large range), mixed scales, runs of
+    // zeros, and lists short and long.
+    const std::size_t n = trial % 7 == 0 ? 0 : 1 + rng() % (trial % 3 == 0 ? 4 : 300);
+    const int scale = static_cast<int>(rng() % 40);
+    std::vector<std::uint64_t> gaps(n);
+    for (auto& g : gaps) {
+      const int s = trial % 5 == 0 ? static_cast<int>(rng() % 40) : scale;
+      g = (rng() % 4 == 0 && trial % 2) || s == 0 ? 0 : rng() >> (64 - s);
+    }
+    RiceChoice want{0, ~std::uint64_t{0}};
+    for (int k = 0; k < 32; ++k) {
+      std::uint64_t bits = 0;
+      for (auto g : gaps) bits += (g >> k) + 1 + static_cast<std::uint64_t>(k);
+      if (bits < want.bits) want = {k, bits};
+    }
+    const RiceChoice got = best_rice(gaps);
+    CHECK(got.k == want.k);
+    CHECK(got.bits == want.bits);
+    ++lists;
+    nonzero_k += want.k > 0;
+    high_k += want.k >= 20;
+  }
+  CHECK(lists == 3000);
+  CHECK(nonzero_k > 1000);
+  CHECK(high_k > 100);
 }

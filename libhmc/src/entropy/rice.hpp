@@ -16,13 +16,21 @@ struct RiceChoice {
 };
 
 inline RiceChoice best_rice(const std::vector<std::uint64_t>& gaps) {
-  RiceChoice best{0, ~std::uint64_t{0}};
-  for (int k = 0; k < 32; ++k) {
-    std::uint64_t bits = 0;
-    for (auto g : gaps) bits += (g >> k) + 1 + static_cast<std::uint64_t>(k);
-    if (bits < best.bits) best = {k, bits};
+  // bits(k) = S(k) + n (1 + k), S(k) = the sum of g >> k, is convex in k:
+  // S(k) - S(k + 1) sums ceil((g >> k) / 2), which cannot grow with k, so
+  // bits(k + 1) - bits(k) = n - (S(k) - S(k + 1)) cannot fall. The first k
+  // from which bits stop falling is the first with the fewest bits.
+  const std::uint64_t n = gaps.size();
+  std::uint64_t sum = 0;  // S(k)
+  for (auto g : gaps) sum += g;
+  int k = 0;
+  for (; k < 31; ++k) {
+    std::uint64_t next = 0;  // S(k + 1)
+    for (auto g : gaps) next += g >> (k + 1);
+    if (sum - next <= n) break;
+    sum = next;
   }
-  return best;
+  return {k, sum + n * static_cast<std::uint64_t>(1 + k)};
 }
 
 /// The gaps of a sorted list of distinct indices: the first entry, then
