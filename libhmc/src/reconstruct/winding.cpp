@@ -383,9 +383,10 @@ std::optional<int> ClosedSurface::jump(const Point& p, const Point& q) const {
   const Lanes seg_hi{narrow(hi[0]), narrow(hi[1]), narrow(hi[2]), INT32_MAX};
   const Lanes seg_lo{narrow(lo[0]), narrow(lo[1]), narrow(lo[2]), INT32_MIN};
   auto apart = [&](const Box& b) {
+    const char* bytes = reinterpret_cast<const char*>(&b);  // the box's own bytes
     Lanes l, h;
-    std::memcpy(&l, b.lo.data(), sizeof l);
-    std::memcpy(&h, b.hi.data(), sizeof h);
+    std::memcpy(&l, bytes + offsetof(Box, lo), sizeof l);
+    std::memcpy(&h, bytes + offsetof(Box, hi), sizeof h);
     const Lanes out = (l > seg_hi) | (h < seg_lo);
     return (out[0] | out[1] | out[2]) != 0;
   };
