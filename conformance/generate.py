@@ -618,9 +618,10 @@ def vqtb_payload(entries, dimension=3):
     return bytes([dimension]) + varint(len(entries)) + b"".join(svarint(v) for e in entries for v in e)
 
 
-def rice_bits(bw, ranks, k=None):
-    """§10.2: one context's count, Rice parameter and gap codes."""
-    bw.ue(len(ranks))
+def rice_bits(bw, ranks, k=None, inverted=None):
+    """§10.2: one context's count, Rice parameter and gap codes; inverted
+    (neighbour contexts, 0 or 1): the count field is 2 * count + inverted."""
+    bw.ue(len(ranks) if inverted is None else 2 * len(ranks) + int(inverted))
     if not ranks:
         return
     gaps = [v - p - 1 for p, v in zip([-1] + list(ranks[:-1]), ranks)]
@@ -635,14 +636,17 @@ def rice_bits(bw, ranks, k=None):
 
 def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, border=(), toggles=(),
                  drops=(), class_code_bits=None, filters=None, mask=None, compact=False, group=1, toggle_bits=None,
-                 common=None, candidate_contexts=False, vertex_contexts=False):
+                 common=None, candidate_contexts=False, vertex_contexts=False, neighbour_contexts=False,
+                 inverted=()):
     """§10. classes: the class of each of the n points (needed when K > 1);
     filters: {filter number: threshold}. compact: flag bit 2, classes in
     groups of `group` points (10.1) and `toggles` as {context: ranks} (10.2),
     or the toggle bit stream as given in `toggle_bits`. common: flag bit 4,
     the classes as a list of the points outside class `common` (10.1).
     candidate_contexts: flag bit 5, 40 toggle contexts (11.5);
-    vertex_contexts: flag bit 6, 80 (with candidate_contexts)."""
+    vertex_contexts: flag bit 6, 80 (with candidate_contexts);
+    neighbour_contexts: flag bit 7, 240 (with vertex_contexts), the lists
+    of the contexts in `inverted` naming the tetrahedra not toggled."""
     filters = filters or {}
     if mask is None:
         mask = sum(1 << i for i in filters)
@@ -654,6 +658,8 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
         flags |= 32
     if vertex_contexts:
         flags |= 64
+    if neighbour_contexts:
+        flags |= 128
     out = bytes([flags, scale_rank, mask]) + b"".join(varint(filters[i]) for i in sorted(filters))
     out += varint(len(multipliers)) + b"".join(varint(m) for m in multipliers)
     if len(multipliers) > 1:
@@ -704,8 +710,8 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
     if toggle_bits is None:
         bw = BitWriter()
         toggles = toggles or {}
-        for j in range(80 if vertex_contexts else 40 if candidate_contexts else 8):
-            rice_bits(bw, sorted(toggles.get(j, ())))
+        for j in range(240 if neighbour_contexts else 80 if vertex_contexts else 40 if candidate_contexts else 8):
+            rice_bits(bw, sorted(toggles.get(j, ())), inverted=(j in inverted) if neighbour_contexts else None)
         toggle_bits = bw.bytes()
     return out + gaps(border) + gaps(drops) + toggle_bits
 
@@ -1267,6 +1273,27 @@ def hb_rcon_vertex_contexts():
     return hb_rcon_contexts(vertices=True)
 
 
+def hb_rcon_neighbour_contexts(bad=False):
+    # Flag bits 5, 6 and 7 (240 toggle contexts, lists that may be
+    # inverted) on the sphere of hb_rcon_contexts(vertices=True). The first
+    # level inverts context 3 * 76 (every one of its tetrahedra toggled but
+    # ranks 0 and 2), so that later tetrahedra meet toggled neighbours; the
+    # listed ranks of the split contexts 3c + 1 and 3c + 2 are ones the walk
+    # reaches. The second level inverts an empty list (context 3 * 36 wholly
+    # toggled) beside plain lists. bad: the inverted list also names rank
+    # 5000, beyond its context.
+    q = 6
+    pts = sphere_pts(180, q, 46)
+    lv = nested(pts, [70, 180], 47)
+    n0, n1 = len(lv[0]), len(lv[1])
+    flags = dict(flags=1, compact=True, candidate_contexts=True, vertex_contexts=True, neighbour_contexts=True)
+    rc0 = rcon_payload(n0, multipliers=(900,), toggles={3 * 44: (0,), 3 * 76: (0, 2, 5000) if bad else (0, 2), 3 * 76 + 1: (0,), 3 * 60: (1,)},
+                       inverted=(3 * 76,), **flags)
+    rc1 = rcon_payload(n1, multipliers=(700, 1800), common=0, classes=[1 if i % 9 == 0 else 0 for i in range(n1)],
+                       toggles={3 * 48: (1,), 3 * 57: (0, 2)}, inverted=(3 * 36,), **flags)
+    return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
+
+
 def hb_rcon_compact_volume():
     q = 5
     pts = rand_pts(120, q, 34)
@@ -1702,6 +1729,8 @@ HANDBUILT = [
      "hand-written compact RCON with class lists (flag bit 4): K = 3 around common class 1, K = 2 with no point listed, K = 64 around common class 40", sec("rcon", "recon")),
     ("rcon-candidate-contexts", hb_rcon_candidate_contexts, F,
      "hand-written compact RCON with candidate contexts (flag bit 5): toggle ranks in contexts 0-39 of two levels of a sphere", sec("rcon", "recon")),
+    ("rcon-neighbour-contexts", hb_rcon_neighbour_contexts, F,
+     "hand-written compact RCON with neighbour contexts (flag bits 5, 6 and 7): toggles in 240 contexts split by toggled earlier neighbours, inverted lists (one empty, toggling its whole context), two levels of a sphere", sec("rcon", "recon")),
     ("rcon-vertex-contexts", hb_rcon_vertex_contexts, F,
      "hand-written compact RCON with vertex contexts (flag bits 5 and 6): toggle ranks in contexts 37-79 of two levels of a sphere, one with a class list", sec("rcon", "recon")),
     ("rcon-compact-volume", hb_rcon_compact_volume, F,
@@ -1994,8 +2023,8 @@ NEGATIVE = [
     ("neg-refn-count", "bad_layer", P, "a REFN adding two points where one is declared", ["8A.1", "13"],
      lambda: stream_q1_refn(refn_single(8))),
     # RCON
-    ("neg-rcon-reserved-flag", "bad_layer", P, "RCON flags 0x80 (a reserved bit)", ["10", "13"],
-     lambda: surface_one_level(rcon_payload(30, flags=128))),
+    ("neg-rcon-neighbour-loose", "bad_layer", P, "RCON flag bit 7 (neighbour_contexts) without vertex_contexts", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, compact=True, candidate_contexts=True, flags=128 | 1))),
     ("neg-rcon-vertex-loose", "bad_layer", P, "RCON flag bit 6 (vertex_contexts) without candidate_contexts", ["10", "13"],
      lambda: surface_one_level(rcon_payload(30, compact=True, flags=64 | 1))),
     ("neg-rcon-candidate-loose", "bad_layer", P, "RCON flag bit 5 (candidate_contexts) without compact", ["10", "13"],
@@ -2073,6 +2102,8 @@ NEGATIVE = [
     ("neg-rcon-toggle-range", "bad_layer", F, "a toggle index equal to the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
     ("neg-rcon-toggle-rank-range", "bad_layer", F, "a compact toggle rank equal to the number of tetrahedra of its context (full profile only)", ["10.2", "11.5", "13"], None),
     ("neg-rcon-candidate-rank-range", "bad_layer", F, "candidate contexts: a toggle rank of context 17 equal to the number of tetrahedra (full profile only)", ["10.2", "11.5", "13"], None),
+    ("neg-rcon-neighbour-rank-range", "bad_layer", F, "neighbour contexts: an inverted list naming rank 5000 of a context of fewer tetrahedra (full profile only)", ["10.2", "11.5", "13"],
+     lambda: hb_rcon_neighbour_contexts(bad=True)),
     ("neg-rcon-vertex-rank-range", "bad_layer", F, "vertex contexts: a toggle rank of context 57 equal to the number of tetrahedra (full profile only)", ["10.2", "11.5", "13"], None),
     ("neg-rcon-drop-range", "bad_layer", F, "a drop index equal to four times the number of tetrahedra (full profile only)", ["10", "11.5", "13"], None),
 ]

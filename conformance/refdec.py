@@ -720,10 +720,15 @@ def decode_vq(payload, q, coarse, n, codebook, form=1):
 # ---------------------------------------------------------------- §10 RCON
 
 
-def rice_list(br, what):
+def rice_list(br, what, inverted=None):
     """§10.2: one list, a count then, if not empty, a Rice parameter and the
-    Rice-coded gaps between its ascending entries."""
+    Rice-coded gaps between its ascending entries. inverted (a list of one
+    flag, for the neighbour contexts of §11.5): the count field carries
+    2 * count + inverted, and the flag is stored there."""
     count = br.ue()
+    if inverted is not None:
+        inverted[0] = count & 1
+        count >>= 1
     if count > len(br.data) * 8 - br.pos:
         raise DecodeError("bad_layer", "RCON: %s count %d above the bits left" % (what, count))
     out = []
@@ -747,9 +752,7 @@ def rice_list(br, what):
 
 def parse_rcon(payload, n, form=1):
     r = ByteReader(payload, "bad_layer", "RCON")
-    flags = r.u8()
-    if flags & 0x80:  # bit 3 (inherit_border) changes only what the border list means
-        r.fail("reserved flag bits set (flags = %d)" % flags)
+    flags = r.u8()  # bit 3 (inherit_border) changes only what the border list means
     compact = flags >> 2 & 1
     class_list = flags >> 4 & 1
     if class_list and not compact:
@@ -760,6 +763,9 @@ def parse_rcon(payload, n, form=1):
     vertex_contexts = flags >> 6 & 1  # §11.5: 80 toggle contexts
     if vertex_contexts and not candidate_contexts:
         r.fail("vertex_contexts (flag bit 6) without candidate_contexts")
+    neighbour_contexts = flags >> 7 & 1  # §11.5: 240 toggle contexts, lists that may be inverted
+    if neighbour_contexts and not vertex_contexts:
+        r.fail("neighbour_contexts (flag bit 7) without vertex_contexts")
     k = r.u8()
     if not 1 <= k <= 64:
         r.fail("scale_rank %d out of range" % k)
@@ -841,7 +847,8 @@ def parse_rcon(payload, n, form=1):
         return out
 
     border = index_list("border", n)
-    toggles = [0] * (80 if vertex_contexts else 40 if candidate_contexts else 8)
+    toggles = [0] * (240 if neighbour_contexts else 80 if vertex_contexts else 40 if candidate_contexts else 8)
+    inverted = []
     if not compact:
         toggles = len(index_list("toggle", None))  # checked against the tetrahedra only when reconstructing
         drops = index_list("drop", None)
@@ -852,10 +859,14 @@ def parse_rcon(payload, n, form=1):
         # are checked against the contexts only when reconstructing.
         br = BitReader(payload, r.pos, "bad_layer", "RCON toggles")
         for j in range(len(toggles)):
-            toggles[j] = len(rice_list(br, "toggle rank of context %d" % j))
+            flag = [0] if neighbour_contexts else None
+            toggles[j] = len(rice_list(br, "toggle rank of context %d" % j, flag))
+            if flag and flag[0]:
+                inverted.append(j)
         br.finish()
     return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list,
-            "candidate_contexts": candidate_contexts, "vertex_contexts": vertex_contexts, "scale_rank": k,
+            "candidate_contexts": candidate_contexts, "vertex_contexts": vertex_contexts,
+            "neighbour_contexts": neighbour_contexts, "inverted": inverted, "scale_rank": k,
             "filters": thresholds,
             "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
             "drops": len(drops)}

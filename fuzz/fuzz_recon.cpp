@@ -45,7 +45,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto back = hmc::detail::read_recon(again, points.size());
   FUZZ_CHECK(back.multipliers == rp.multipliers && back.vertex_class == rp.vertex_class && back.compact == rp.compact &&
                  back.candidate_contexts == rp.candidate_contexts && back.vertex_contexts == rp.vertex_contexts &&
-                 back.toggles == rp.toggles &&
+                 back.neighbour_contexts == rp.neighbour_contexts && back.neighbour_lists == rp.neighbour_lists &&
+                 back.neighbour_inverted == rp.neighbour_inverted && back.toggles == rp.toggles &&
                  back.toggle_ranks == rp.toggle_ranks && back.drops == rp.drops && back.border == rp.border &&
                  back.filters == rp.filters && back.peel == rp.peel && back.repair == rp.repair &&
                  back.scale_rank == rp.scale_rank && back.border_delta == rp.border_delta,

@@ -345,18 +345,21 @@ rc = bytes([1 | 4 | 16, 6, 0, 3]) + varint(400) + varint(900) + varint(3000) + b
 put("recon", "class-list", bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) + rc)
 
 # Candidate contexts (RCON flag bit 5): 40 toggle lists, rank 1 in context
-# 9; vertex contexts (bits 5 and 6): 80 lists, rank 0 in context 60.
+# 9; vertex contexts (bits 5 and 6): 80 lists, rank 0 in context 60;
+# neighbour contexts (bits 5, 6 and 7): 240 lists, the one of context 180
+# inverted (every tetrahedron of it but rank 0 toggled; counts 2n + inverted).
 def one_toggle_rcon(flags, contexts, at, rank):
     b = Bits()
     for j in range(contexts):
         if j == at:
-            b.ue(1); b.put(0, 5); b.put((1 << (rank + 1)) - 2, rank + 1)  # Rice parameter 0: rank 1s, a 0
+            b.ue(3 if flags & 128 else 1); b.put(0, 5); b.put((1 << (rank + 1)) - 2, rank + 1)  # Rice parameter 0: rank 1s, a 0
         else:
             b.ue(0)
     return bytes([flags, 6, 0, 1]) + varint(900) + bytes([0, 0]) + b.bytes()
 
 for name, flags, contexts, at, rank in (("candidate-contexts", 1 | 4 | 32, 40, 9, 1),
-                                        ("vertex-contexts", 1 | 4 | 32 | 64, 80, 60, 0)):
+                                        ("vertex-contexts", 1 | 4 | 32 | 64, 80, 60, 0),
+                                        ("neighbour-contexts", 1 | 4 | 32 | 64 | 128, 240, 180, 0)):
     put("recon", name, bytes([0, len(sphere) - 4]) + bytes(v for p in sphere for v in p) +
         one_toggle_rcon(flags, contexts, at, rank))
 

@@ -1019,6 +1019,123 @@ TEST_CASE("toggle contexts are spec 11.5's, read plainly") {
   CHECK(std::count_if(seen.begin(), seen.end(), [](int x) { return x >= 40; }) > 10);
 }
 
+TEST_CASE("neighbour contexts (RCON flag bit 7): spec 11.5 read plainly, inverted lists, round trip, errors") {
+  // The encoder's torus (fidelity exact: its cocircular quads need
+  // toggles), its toggles sent again in the neighbour contexts.
+  EncodeOptions o;
+  o.fidelity = Fidelity::exact;
+  const auto e = encode(samples::torus(24, 12), o).value();
+  Chunks c = chunks_of(e.bytes);
+  const std::size_t r = c.index(kRecon);
+  REQUIRE(r < c.list.size());
+  const ReconParams sent = read_payload(c.list[r].second, e.points.size());
+  const auto dt = delaunay(e.points);
+  const std::size_t nt = dt.tets.size();
+  std::vector<std::uint8_t> cand;
+  const auto labels = rule_labels(e.points, dt, local_scale(e.points, dt, sent.scale_rank), sent, &cand);
+  auto want = labels;
+  apply_toggles(dt, sent, want, &cand);
+  std::vector<std::uint32_t> toggled;
+  for (std::size_t t = 0; t < nt; ++t)
+    if (want[t] != labels[t]) toggled.push_back(static_cast<std::uint32_t>(t));
+  REQUIRE(toggled.size() > 20);
+  // Plainly: in ascending index, 3 times the context of the 80 plus how many
+  // face neighbours of smaller index are toggled (at most 2); ranks count
+  // the tetrahedra of each context so far.
+  const auto ctx = toggle_contexts(dt, labels, &cand, true);
+  std::vector<std::vector<std::uint32_t>> ranks(kNeighbourContexts);
+  std::vector<std::uint32_t> sizes(kNeighbourContexts, 0);
+  std::set<int> splits;
+  for (std::size_t t = 0; t < nt; ++t) {
+    int a = 0;
+    for (int k = 0; k < 4; ++k) {
+      const std::uint32_t u = dt.neighbors[t][k];
+      if (u != kNoTet && u < t && want[u] != labels[u]) ++a;
+    }
+    const int j = 3 * ctx[t] + std::min(a, 2);
+    splits.insert(std::min(a, 2));
+    if (want[t] != labels[t]) ranks[static_cast<std::size_t>(j)].push_back(sizes[static_cast<std::size_t>(j)]);
+    ++sizes[static_cast<std::size_t>(j)];
+  }
+  CHECK(splits.size() == 3);  // every split occurs
+  const auto nr = neighbour_ranks(dt, ctx, toggled);
+  CHECK(nr.ranks == ranks);
+  CHECK(nr.sizes == sizes);
+  // Sent with no list inverted, and with the list of every context that has
+  // toggles inverted (naming the tetrahedra left alone).
+  for (const bool invert : {false, true}) {
+    CAPTURE(invert);
+    ReconParams p = sent;
+    p.toggle_ranks = {};
+    p.candidate_contexts = p.vertex_contexts = p.neighbour_contexts = true;
+    p.neighbour_lists = ranks;
+    p.neighbour_inverted.assign(kNeighbourContexts, 0);
+    std::size_t inverted = 0;
+    for (std::size_t j = 0; j < kNeighbourContexts; ++j) {
+      if (!invert || ranks[j].empty()) continue;
+      std::vector<std::uint32_t> others;
+      for (std::uint32_t x = 0; x < sizes[j]; ++x)
+        if (!std::binary_search(ranks[j].begin(), ranks[j].end(), x)) others.push_back(x);
+      p.neighbour_lists[j] = others;
+      p.neighbour_inverted[j] = 1;
+      ++inverted;
+    }
+    if (invert) CHECK(inverted > 0);
+    auto got = labels;
+    apply_toggles(dt, p, got, &cand);
+    CHECK(got == want);
+    const auto bytes = write_recon(p);
+    CHECK((bytes[0] & 128) != 0);
+    const auto back = read_payload(bytes, e.points.size());
+    CHECK(back.neighbour_contexts);
+    CHECK(back.neighbour_lists == p.neighbour_lists);
+    CHECK(back.neighbour_inverted == p.neighbour_inverted);
+    c.list[r].second = bytes;
+    const auto b = c.bytes();
+    const auto d = decode(b.data(), b.size()).value();
+    CHECK(d.levels.back().triangles == e.triangles);
+    // A rank one past its context's last tetrahedron is bad_layer, whether
+    // the list is inverted or not.
+    for (std::size_t j = 0; j < kNeighbourContexts; ++j) {
+      if (p.neighbour_lists[j].empty()) continue;
+      ReconParams q = p;
+      q.neighbour_lists[j].back() = sizes[j];
+      auto x = labels;
+      CHECK_THROWS_AS(apply_toggles(dt, q, x, &cand), StreamError);
+      c.list[r].second = write_recon(q);
+      const auto bq = c.bytes();
+      CHECK(decode(bq.data(), bq.size()).status() == Status::bad_layer);
+      break;
+    }
+  }
+  // An empty inverted list toggles its whole context.
+  {
+    ReconParams p = sent;
+    p.toggle_ranks = {};
+    p.candidate_contexts = p.vertex_contexts = p.neighbour_contexts = true;
+    p.neighbour_lists.assign(kNeighbourContexts, {});
+    p.neighbour_inverted.assign(kNeighbourContexts, 0);
+    const std::size_t j = 3 * static_cast<std::size_t>(ctx[0]);  // the first tetrahedron's context: nothing before it
+    p.neighbour_inverted[j] = 1;
+    auto got = labels;
+    apply_toggles(dt, p, got, &cand);
+    std::size_t flipped = 0;
+    for (std::size_t t = 0; t < nt; ++t) flipped += got[t] != labels[t];
+    CHECK(got[0] != labels[0]);
+    CHECK(flipped >= 1);
+    CHECK(flipped <= static_cast<std::size_t>(std::count(ctx.begin(), ctx.end(), ctx[0])));
+  }
+  // Flag bit 7 needs bit 6: bad_layer.
+  ReconParams p = sent;
+  p.toggle_ranks = {};
+  p.candidate_contexts = p.vertex_contexts = p.neighbour_contexts = true;
+  p.neighbour_lists = ranks;
+  p.neighbour_inverted.assign(kNeighbourContexts, 0);
+  auto bytes = write_recon(p);
+  bytes[0] = static_cast<std::uint8_t>(bytes[0] & ~64);
+  CHECK(payload_status(bytes, e.points.size()) == Status::bad_layer);
+}
+
 TEST_CASE("compact RCON: a class list where one class holds nearly every point, and its errors") {
   std::uint64_t seed = 11;
   auto next = [&]() { return seed = seed * 6364136223846793005ull + 1442695040888963407ull, seed >> 33; };

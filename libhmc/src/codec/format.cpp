@@ -224,8 +224,10 @@ std::vector<std::uint8_t> read_class_groups(BitReader& br, std::uint32_t classes
 // A sorted list of distinct indices as one context of spec 10.2: a count,
 // and the gaps between entries in a Rice code whose parameter the encoder
 // picks (the toggle ranks of each context, the points of a class list).
-void write_rice_list(BitWriter& bw, const std::vector<std::uint32_t>& list) {
-  bw.exp_golomb(static_cast<std::uint32_t>(list.size()));
+// `inverted` (a neighbour context's list, spec 0.24): the count is sent as
+// 2·count + inverted.
+void write_rice_list(BitWriter& bw, const std::vector<std::uint32_t>& list, int inverted = -1) {
+  bw.exp_golomb(static_cast<std::uint32_t>(inverted < 0 ? list.size() : 2 * list.size() + static_cast<std::size_t>(inverted)));
   if (list.empty()) return;
   const auto gaps = index_gaps(list);
   const int best_k = best_rice(gaps).k;
@@ -238,8 +240,9 @@ void write_rice_list(BitWriter& bw, const std::vector<std::uint32_t>& list) {
 }
 
 // Reads one list written by write_rice_list; `what` names it in errors.
-std::vector<std::uint32_t> read_rice_list(BitReader& br, const std::string& what) {
-  const std::uint64_t count = br.exp_golomb();
+std::vector<std::uint32_t> read_rice_list(BitReader& br, const std::string& what, bool* inverted = nullptr) {
+  std::uint64_t count = br.exp_golomb();
+  if (inverted) *inverted = (count & 1) != 0, count >>= 1;
   // Each entry takes at least one bit.
   if (count > br.bits_left())
     fail(Status::bad_layer, "RCON: " + what + " count " + std::to_string(count) + " is larger than the bits left");
@@ -272,6 +275,27 @@ std::vector<std::uint8_t> write_toggle_ranks(const std::array<std::vector<std::u
            "RCON: toggle ranks in context " + std::to_string(j) + " of " + std::to_string(contexts));
   }
   return bw.finish();
+}
+
+// The lists of the neighbour contexts (flag bit 7): one for each of them,
+// its count carrying whether it is inverted.
+std::vector<std::uint8_t> write_neighbour_lists(const ReconParams& p) {
+  if (p.neighbour_lists.size() != kNeighbourContexts || p.neighbour_inverted.size() != kNeighbourContexts)
+    fail(Status::internal_error, "RCON: neighbour contexts without their lists");
+  BitWriter bw;
+  for (std::size_t j = 0; j < kNeighbourContexts; ++j)
+    write_rice_list(bw, p.neighbour_lists[j], p.neighbour_inverted[j] ? 1 : 0);
+  return bw.finish();
+}
+
+void read_neighbour_lists(BitReader& br, ReconParams& p) {
+  p.neighbour_lists.resize(kNeighbourContexts);
+  p.neighbour_inverted.assign(kNeighbourContexts, 0);
+  for (std::size_t j = 0; j < kNeighbourContexts; ++j) {
+    bool inverted = false;
+    p.neighbour_lists[j] = read_rice_list(br, "toggle rank", &inverted);
+    p.neighbour_inverted[j] = inverted ? 1 : 0;
+  }
 }
 
 std::array<std::vector<std::uint32_t>, kToggleContexts> read_toggle_ranks(BitReader& br, int contexts) {
@@ -338,11 +362,12 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
     auto list = write_class_list(p.vertex_class, k);
     if (list.size() < classes.size()) classes = std::move(list), class_list = true;
   }
-  if ((p.candidate_contexts && !p.compact) || (p.vertex_contexts && !p.candidate_contexts))
+  if ((p.candidate_contexts && !p.compact) || (p.vertex_contexts && !p.candidate_contexts) ||
+      (p.neighbour_contexts && !p.vertex_contexts))
     fail(Status::internal_error, "RCON: toggle contexts without the flags they need");
   w.u8(static_cast<std::uint8_t>((p.peel ? 1 : 0) | (p.repair ? 2 : 0) | (p.compact ? 4 : 0) | (p.border_delta ? 8 : 0) |
                                  (class_list ? 16 : 0) | (p.candidate_contexts ? 32 : 0) |
-                                 (p.vertex_contexts ? 64 : 0)));
+                                 (p.vertex_contexts ? 64 : 0) | (p.neighbour_contexts ? 128 : 0)));
   w.u8(static_cast<std::uint8_t>(p.scale_rank));
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
@@ -369,7 +394,7 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   write_index_list(w, p.border);
   if (p.compact) {
     write_index_list(w, p.drops);
-    w.bytes(write_toggle_ranks(p.toggle_ranks, toggle_context_count(p)));
+    w.bytes(p.neighbour_contexts ? write_neighbour_lists(p) : write_toggle_ranks(p.toggle_ranks, toggle_context_count(p)));
   } else {
     write_index_list(w, p.toggles);
     write_index_list(w, p.drops);
@@ -381,7 +406,6 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   ByteReader r(c.payload, c.length, Status::bad_layer, "RCON");
   ReconParams p;
   const std::uint8_t flags = r.u8();
-  if (flags > 127) fail(Status::bad_layer, "RCON: reserved flag bits are set (" + std::to_string(flags) + ")");
   p.peel = flags & 1;
   p.repair = (flags & 2) != 0;
   p.compact = (flags & 4) != 0;
@@ -394,6 +418,9 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   p.vertex_contexts = (flags & 64) != 0;
   if (p.vertex_contexts && !p.candidate_contexts)
     fail(Status::bad_layer, "RCON: vertex contexts (flag bit 6) without candidate contexts (bit 5)");
+  p.neighbour_contexts = (flags & 128) != 0;
+  if (p.neighbour_contexts && !p.vertex_contexts)
+    fail(Status::bad_layer, "RCON: neighbour contexts (flag bit 7) without vertex contexts (bit 6)");
   p.scale_rank = r.u8();
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");
@@ -432,7 +459,8 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   if (p.compact) {
     p.drops = read_index_list(r, kIndexBound, "dropped face");
     BitReader br(r.here(), r.remaining(), "RCON toggles");
-    p.toggle_ranks = read_toggle_ranks(br, toggle_context_count(p));
+    if (p.neighbour_contexts) read_neighbour_lists(br, p);
+    else p.toggle_ranks = read_toggle_ranks(br, toggle_context_count(p));
     br.expect_end();
     return p;
   }

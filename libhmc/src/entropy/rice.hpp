@@ -45,8 +45,10 @@ inline std::vector<std::uint64_t> index_gaps(const std::vector<std::uint32_t>& l
 
 /// Bits of one list of spec 10.2: ue(count), then the parameter and the
 /// codes when the list is not empty.
-inline std::uint64_t rice_list_bits(const std::vector<std::uint32_t>& list) {
-  std::uint64_t x = list.size() + 1, z = 0;
+/// `count` (spec 0.24's neighbour contexts): the value the count field
+/// carries, if not the list's length.
+inline std::uint64_t rice_list_bits(const std::vector<std::uint32_t>& list, std::uint64_t count = ~std::uint64_t{0}) {
+  std::uint64_t x = (count == ~std::uint64_t{0} ? list.size() : count) + 1, z = 0;
   while (x >> (z + 1)) ++z;
   if (list.empty()) return 2 * z + 1;
   return 2 * z + 1 + 5 + best_rice(index_gaps(list)).bits;

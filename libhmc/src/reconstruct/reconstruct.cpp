@@ -1026,6 +1026,21 @@ std::vector<std::uint8_t> toggle_contexts(const Tetrahedralization& dt, const st
   return ctx;
 }
 
+namespace {
+
+// The neighbour context of tetrahedron t (spec 11.5, flag bit 7): 3 times
+// its context of the 80, plus how many of its face neighbours of smaller
+// index are toggled (`flipped`, decided for every tetrahedron before t),
+// at most 2. A hull face leads to kNoTet, above every index.
+std::size_t neighbour_context(const Tetrahedralization& dt, const std::vector<std::uint8_t>& ctx,
+                              const std::vector<std::uint8_t>& flipped, std::size_t t) {
+  unsigned a = 0;
+  for (std::uint32_t u : dt.neighbors[t]) a += u < t ? flipped[u] : 0u;
+  return 3 * std::size_t{ctx[t]} + std::min(a, 2u);
+}
+
+}  // namespace
+
 std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetrahedralization& dt,
                                                                      const std::vector<std::uint8_t>& inside,
                                                                      const std::vector<std::uint32_t>& toggled,
@@ -1057,9 +1072,26 @@ std::array<ToggleRanks, 3> toggle_ranks(const std::vector<std::uint8_t>& ctx, co
   return ranks;
 }
 
+NeighbourRanks neighbour_ranks(const Tetrahedralization& dt, const std::vector<std::uint8_t>& ctx,
+                               const std::vector<std::uint32_t>& toggled) {
+  const std::size_t nt = ctx.size();
+  std::vector<std::uint8_t> flipped(nt, 0);
+  for (std::uint32_t t : toggled) flipped[t] = 1;
+  NeighbourRanks out;
+  out.ranks.resize(kNeighbourContexts);
+  out.sizes.assign(kNeighbourContexts, 0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const std::size_t j = neighbour_context(dt, ctx, flipped, t);
+    if (flipped[t]) out.ranks[j].push_back(out.sizes[j]);
+    ++out.sizes[j];
+  }
+  return out;
+}
+
 std::size_t toggle_count(const ReconParams& p) {
   std::size_t n = p.toggles.size();
   for (const auto& r : p.toggle_ranks) n += r.size();
+  for (const auto& r : p.neighbour_lists) n += r.size();
   return n;
 }
 
@@ -1069,6 +1101,32 @@ void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vect
     if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
   }
   std::vector<std::uint32_t> flip(p.toggles);
+  if (p.neighbour_contexts) {
+    // Each tetrahedron's context depends on the toggles of its neighbours
+    // of smaller index: one walk in ascending index decides them in turn.
+    if (!p.vertex_contexts || !cand || cand->size() != 4 * inside.size() ||
+        p.neighbour_lists.size() != kNeighbourContexts || p.neighbour_inverted.size() != kNeighbourContexts)
+      fail(Status::internal_error, "apply_toggles: neighbour contexts need vertex contexts, their lists and the candidates");
+    const auto ctx = toggle_contexts(dt, inside, cand, true);
+    std::vector<std::uint8_t> flipped(ctx.size(), 0);
+    std::array<std::uint32_t, kNeighbourContexts> seen{};
+    std::array<std::size_t, kNeighbourContexts> next{};
+    for (std::size_t t = 0; t < ctx.size(); ++t) {
+      const std::size_t j = neighbour_context(dt, ctx, flipped, t);
+      const auto& list = p.neighbour_lists[j];
+      const bool listed = next[j] < list.size() && list[next[j]] == seen[j];
+      next[j] += listed;
+      flipped[t] = listed != (p.neighbour_inverted[j] != 0);
+      ++seen[j];
+    }
+    for (std::size_t j = 0; j < kNeighbourContexts; ++j)
+      if (next[j] < p.neighbour_lists[j].size())
+        fail(Status::bad_layer, "RCON: toggle rank " + std::to_string(p.neighbour_lists[j][next[j]]) +
+                                    " of neighbour context " + std::to_string(j) + " names no tetrahedron (the context has " +
+                                    std::to_string(seen[j]) + ")");
+    for (std::size_t t = 0; t < ctx.size(); ++t) inside[t] ^= flipped[t];
+    return;
+  }
   // Contexts cost a pass over the tetrahedra: only when some rank is listed.
   if (p.compact && std::any_of(p.toggle_ranks.begin(), p.toggle_ranks.end(), [](const auto& r) { return !r.empty(); })) {
     // All ranks refer to the labels before any toggle.

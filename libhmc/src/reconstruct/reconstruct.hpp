@@ -25,6 +25,10 @@ namespace hmc::detail {
 constexpr int kToggleContexts = 80;
 constexpr int kCandidateContexts = 40;
 constexpr int kLabelContexts = 8;
+/// With neighbour contexts (flag bit 7, spec 0.24, with vertex contexts):
+/// each of the 80 also split by how many of the tetrahedron's face
+/// neighbours of smaller index are toggled (0, 1, 2 or more), 240.
+constexpr int kNeighbourContexts = 3 * kToggleContexts;
 
 /// Side information that drives the rule (the RCON chunk's content).
 struct ReconParams {
@@ -66,6 +70,15 @@ struct ReconParams {
   /// RCON flag bit 6 (spec 0.21, with candidate_contexts): toggle contexts
   /// also tell whether all four vertices are on the interface.
   bool vertex_contexts = false;
+  /// RCON flag bit 7 (spec 0.24, with vertex_contexts): the toggles travel
+  /// in `neighbour_lists` instead of `toggle_ranks`.
+  bool neighbour_contexts = false;
+  /// With neighbour_contexts: per context j < kNeighbourContexts (spec
+  /// 11.5), sorted distinct ranks among the tetrahedra of context j in
+  /// ascending index: of the toggled ones, or, where neighbour_inverted[j],
+  /// of the ones not toggled. Both kNeighbourContexts long (else empty).
+  std::vector<std::vector<std::uint32_t>> neighbour_lists;
+  std::vector<std::uint8_t> neighbour_inverted;
   /// Tetrahedra whose label is inverted after the rule (sorted, distinct);
   /// only when !compact.
   std::vector<std::uint32_t> toggles;
@@ -195,7 +208,20 @@ std::array<std::vector<std::uint32_t>, kToggleContexts> toggle_ranks(const Tetra
 using ToggleRanks = std::array<std::vector<std::uint32_t>, kToggleContexts>;
 std::array<ToggleRanks, 3> toggle_ranks(const std::vector<std::uint8_t>& ctx, const std::vector<std::uint32_t>& toggled);
 
-/// Number of toggles `p` carries, in either form.
+/// The neighbour contexts' lists (spec 11.5, flag bit 7) of the toggled
+/// tetrahedra `toggled` (ascending), from the 80 contexts `ctx`
+/// (toggle_contexts() with candidates and vertices): for each context j,
+/// `ranks[j]` the ranks of its toggled tetrahedra and `sizes[j]` its number
+/// of tetrahedra. The encoder lists either those ranks or the others.
+struct NeighbourRanks {
+  std::vector<std::vector<std::uint32_t>> ranks;
+  std::vector<std::uint32_t> sizes;
+};
+NeighbourRanks neighbour_ranks(const Tetrahedralization& dt, const std::vector<std::uint8_t>& ctx,
+                               const std::vector<std::uint32_t>& toggled);
+
+/// Number of toggles `p` carries, in either form (with neighbour contexts,
+/// the listed entries: an inverted list names tetrahedra left as they are).
 std::size_t toggle_count(const ReconParams& p);
 
 /// Invert the labels `p` toggles (spec 11.5); bad_layer for an index or a
