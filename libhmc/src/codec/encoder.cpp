@@ -185,17 +185,9 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
       tr = std::move(sheet_tr);
     }
   }
-  // Inverted lists of neighbour contexts name the tetrahedra left alone: the
-  // corrections are then counted on the labels.
-  const bool count_labels = plan.params.neighbour_contexts && !tr.labels.empty();
-  const std::vector<std::uint8_t> rule = count_labels ? tr.labels : std::vector<std::uint8_t>{};
   plan.rec = tr.labels.empty() ? reconstruct(plan.points, dt, kind, plan.params)
                                : reconstruct_from_labels(dt, kind, plan.params, std::move(tr.labels), &tr.candidates);
-  plan.report.label_corrections = toggle_count(plan.params);
-  if (count_labels) {
-    plan.report.label_corrections = 0;
-    for (std::size_t t = 0; t < rule.size(); ++t) plan.report.label_corrections += rule[t] != plan.rec.inside[t];
-  }
+  plan.report.label_corrections = tr.corrections;
   plan.report.rule_mismatches = tr.mismatches_before_toggles;
 }
 

@@ -1101,51 +1101,38 @@ void apply_toggles(const Tetrahedralization& dt, const ReconParams& p, std::vect
     if (t >= inside.size()) fail(Status::bad_layer, "RCON: toggled tetrahedron " + std::to_string(t) + " does not exist");
   }
   std::vector<std::uint32_t> flip(p.toggles);
-  if (p.neighbour_contexts) {
-    // Each tetrahedron's context depends on the toggles of its neighbours
-    // of smaller index: one walk in ascending index decides them in turn.
-    if (!p.vertex_contexts || !cand || cand->size() != 4 * inside.size() ||
-        p.neighbour_lists.size() != kNeighbourContexts || p.neighbour_inverted.size() != kNeighbourContexts)
-      fail(Status::internal_error, "apply_toggles: neighbour contexts need vertex contexts, their lists and the candidates");
-    const auto ctx = toggle_contexts(dt, inside, cand, true);
-    std::vector<std::uint8_t> flipped(ctx.size(), 0);
-    std::array<std::uint32_t, kNeighbourContexts> seen{};
-    std::array<std::size_t, kNeighbourContexts> next{};
-    for (std::size_t t = 0; t < ctx.size(); ++t) {
-      const std::size_t j = neighbour_context(dt, ctx, flipped, t);
-      const auto& list = p.neighbour_lists[j];
-      const bool listed = next[j] < list.size() && list[next[j]] == seen[j];
-      next[j] += listed;
-      flipped[t] = listed != (p.neighbour_inverted[j] != 0);
-      ++seen[j];
-    }
-    for (std::size_t j = 0; j < kNeighbourContexts; ++j)
-      if (next[j] < p.neighbour_lists[j].size())
-        fail(Status::bad_layer, "RCON: toggle rank " + std::to_string(p.neighbour_lists[j][next[j]]) +
-                                    " of neighbour context " + std::to_string(j) + " names no tetrahedron (the context has " +
-                                    std::to_string(seen[j]) + ")");
-    for (std::size_t t = 0; t < ctx.size(); ++t) inside[t] ^= flipped[t];
-    return;
-  }
-  // Contexts cost a pass over the tetrahedra: only when some rank is listed.
-  if (p.compact && std::any_of(p.toggle_ranks.begin(), p.toggle_ranks.end(), [](const auto& r) { return !r.empty(); })) {
+  // Contexts cost a pass over the tetrahedra: only when some list can toggle
+  // (an inverted list of the neighbour contexts toggles even when empty).
+  const bool neighbours = p.neighbour_contexts;
+  if (p.compact &&
+      (neighbours || std::any_of(p.toggle_ranks.begin(), p.toggle_ranks.end(), [](const auto& r) { return !r.empty(); }))) {
     // All ranks refer to the labels before any toggle.
+    if (neighbours && (!p.vertex_contexts || !p.candidate_contexts || p.neighbour_lists.size() != kNeighbourContexts ||
+                       p.neighbour_inverted.size() != kNeighbourContexts))
+      fail(Status::internal_error, "apply_toggles: neighbour contexts need vertex contexts and their lists");
     if (p.candidate_contexts && (!cand || cand->size() != 4 * inside.size()))
       fail(Status::internal_error, "apply_toggles: candidate contexts need the candidate flags");
     const auto ctx = toggle_contexts(dt, inside, p.candidate_contexts ? cand : nullptr, p.vertex_contexts);
-    std::array<std::uint32_t, kToggleContexts> seen{};
-    std::array<std::size_t, kToggleContexts> next{};
+    // A neighbour context depends on the toggles of the tetrahedra before
+    // it: the walk in ascending index decides them in turn.
+    const std::vector<std::uint32_t>* lists = neighbours ? p.neighbour_lists.data() : p.toggle_ranks.data();
+    const int contexts = neighbours ? kNeighbourContexts : kToggleContexts;
+    std::vector<std::uint8_t> flipped(neighbours ? ctx.size() : 0, 0);
+    std::array<std::uint32_t, kNeighbourContexts> seen{};
+    std::array<std::size_t, kNeighbourContexts> next{};
     for (std::size_t t = 0; t < ctx.size(); ++t) {
-      const int j = ctx[t];
-      if (next[j] < p.toggle_ranks[j].size() && p.toggle_ranks[j][next[j]] == seen[j]) {
-        flip.push_back(static_cast<std::uint32_t>(t));
-        ++next[j];
-      }
+      const std::size_t j = neighbours ? neighbour_context(dt, ctx, flipped, t) : ctx[t];
+      const bool listed = next[j] < lists[j].size() && lists[j][next[j]] == seen[j];
+      next[j] += listed;
       ++seen[j];
+      if (listed != (neighbours && p.neighbour_inverted[j] != 0)) {
+        flip.push_back(static_cast<std::uint32_t>(t));
+        if (neighbours) flipped[t] = 1;
+      }
     }
-    for (int j = 0; j < kToggleContexts; ++j)
-      if (next[j] < p.toggle_ranks[j].size())
-        fail(Status::bad_layer, "RCON: toggle rank " + std::to_string(p.toggle_ranks[j][next[j]]) + " of context " +
+    for (int j = 0; j < contexts; ++j)
+      if (next[j] < lists[j].size())
+        fail(Status::bad_layer, "RCON: toggle rank " + std::to_string(lists[j][next[j]]) + " of context " +
                                     std::to_string(j) + " names no tetrahedron (the context has " +
                                     std::to_string(seen[j]) + ")");
   }

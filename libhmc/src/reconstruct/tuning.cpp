@@ -878,6 +878,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     // the shared models, the toggles of the skull, horse and bunny cost 29 to
     // 42 % less).
     auto cand = candidate_flags(points, dt, best_scale, best, nullptr, &memo);
+    if (report) report->corrections = list.size();
     auto coding = code_toggles(dt, rule, list, cand, true);
     if (coding.by_neighbours) {
       best.toggle_ranks = {};

@@ -84,6 +84,8 @@ std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, co
 /// What tuning chose and what it costs.
 struct TuningReport {
   std::uint64_t mismatches_before_toggles = 0;
+  /// The tetrahedra the chosen toggles invert (whichever form lists them).
+  std::uint64_t corrections = 0;
   std::uint64_t side_bits_estimate = 0;
   /// The rule's labels for the chosen parameters (after the repair when
   /// they set it), before toggles, for reconstruct_from_labels(); empty
