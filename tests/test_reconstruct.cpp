@@ -571,6 +571,8 @@ TEST_CASE("the candidate filters give the plainly written rule's labels") {
     pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
     const auto dt = delaunay(pts);
     const auto scale = local_scale(pts, dt, 6);
+    const TetEdgeLengths edges(pts, dt);  // the encoder's trials share them
+    REQUIRE(edges.d2.size() == dt.tets.size());
     ReconParams base;
     base.peel = false;
     base.multipliers = {1024};
@@ -616,6 +618,9 @@ TEST_CASE("the candidate filters give the plainly written rule's labels") {
         std::vector<std::uint8_t> cand;
         CHECK(rule_labels(pts, dt, scale, p, &cand, nullptr, &memo) == plain.inside);
         CHECK(cand == plain.candidates);
+        CHECK(candidate_flags(pts, dt, scale, p, nullptr, nullptr, &edges) == plain.candidates);
+        CHECK(rule_labels(pts, dt, scale, p, &cand, nullptr, &shared, &edges) == plain.inside);
+        CHECK(cand == plain.candidates);
         ++compared;
         differing_from_unfiltered += flags != unfiltered_flags;
       }
@@ -624,6 +629,45 @@ TEST_CASE("the candidate filters give the plainly written rule's labels") {
   CHECK(compared == 3 * 12 * 2);
   CHECK(reused == 3 * 2 * 2);  // 16 and 32, both tables, the three sets: the memo decided
   CHECK(differing_from_unfiltered > compared * 3 / 4);  // the filters do remove candidates
+}
+
+TEST_CASE("the edge test's lengths, computed once, give the same flags; beyond 32 bits they are not kept") {
+  // Squared lengths fit in 32 bits while the points span at most 37,837
+  // grid units on each axis (3 * 37,837^2 < 2^32 <= 3 * 37,838^2).
+  for (std::uint32_t extent : {37837u, 37838u, 1u << 20}) {
+    CAPTURE(extent);
+    std::mt19937 rng(extent);
+    std::uniform_int_distribution<std::uint32_t> c(0, extent);
+    std::set<GridPoint> s{{0, 0, 0}, {extent, extent, extent}};  // the full extent on every axis
+    while (s.size() < 200) s.insert({c(rng), c(rng), c(rng)});
+    const std::vector<GridPoint> pts(s.begin(), s.end());
+    const auto dt = delaunay(pts);
+    const TetEdgeLengths edges(pts, dt);
+    CHECK(edges.d2.size() == (extent <= 37837 ? dt.tets.size() : 0));
+    if (!edges.d2.empty()) {
+      // The diagonal's squared length, 3 * extent^2, is kept exactly.
+      std::uint64_t longest = 0;
+      for (const auto& e : edges.d2) longest = std::max<std::uint64_t>(longest, *std::max_element(e.begin(), e.end()));
+      CHECK(longest <= 3 * std::uint64_t{extent} * extent);
+    }
+    const auto scale = local_scale(pts, dt, 6);
+    for (std::uint32_t m : {256u, 1024u, 4096u}) {
+      ReconParams p;
+      p.peel = false;  // plain_rule() is the rule without peeling
+      p.multipliers = {m};
+      const auto plain = plain_rule(pts, dt, scale, p);
+      CHECK(candidate_flags(pts, dt, scale, p, nullptr, nullptr, &edges) == plain.candidates);
+      CHECK(rule_labels(pts, dt, scale, p, nullptr, nullptr, nullptr, &edges) == plain.inside);
+    }
+  }
+  // Lengths of other tetrahedra are an internal error, not wrong flags.
+  const std::vector<GridPoint> a{{0, 0, 0}, {0, 0, 9}, {0, 9, 0}, {9, 0, 0}, {9, 9, 9}};  // canonical order
+  const auto dt = delaunay(a);
+  TetEdgeLengths wrong(a, dt);
+  wrong.d2.pop_back();
+  ReconParams p;
+  p.multipliers = {1024};
+  CHECK_THROWS(candidate_flags(a, dt, local_scale(a, dt, 6), p, nullptr, nullptr, &wrong));
 }
 
 TEST_CASE("filters only remove candidate faces, and their RCON syntax is checked") {

@@ -34,26 +34,35 @@ std::vector<std::uint64_t> limits(const std::vector<std::uint64_t>& scale, const
 // has 256·|uv|² <= min(lim[u], lim[v]). Each of the six edges is tested
 // once and shared by its two faces; the four points and limits are read
 // once.
-unsigned candidate_faces(const std::vector<GridPoint>& pts, const std::vector<std::uint64_t>& lim,
-                         const std::array<std::uint32_t, 4>& t) {
+// The squared lengths of a tetrahedron's six edges, in the order of
+// TetEdgeLengths.
+std::array<std::uint64_t, 6> edge_lengths(const std::vector<GridPoint>& pts, const std::array<std::uint32_t, 4>& t) {
   std::int64_t x[4][3];
-  std::uint64_t l[4];
   for (std::size_t i = 0; i < 4; ++i) {
     const GridPoint& p = pts[t[i]];
     for (std::size_t a = 0; a < 3; ++a) x[i][a] = p[a];
-    l[i] = lim[t[i]];
   }
-  unsigned faces = 0xF;
+  std::array<std::uint64_t, 6> out{};
+  std::size_t e = 0;
   for (std::size_t i = 0; i < 4; ++i)
-    for (std::size_t j = i + 1; j < 4; ++j) {
-      std::uint64_t d2 = 0;
+    for (std::size_t j = i + 1; j < 4; ++j, ++e)
       for (std::size_t a = 0; a < 3; ++a) {
         const std::int64_t d = x[i][a] - x[j][a];
-        d2 += static_cast<std::uint64_t>(d * d);
+        out[e] += static_cast<std::uint64_t>(d * d);
       }
+  return out;
+}
+
+template <typename Length>
+unsigned candidate_faces(const std::array<Length, 6>& d2, const std::vector<std::uint64_t>& lim,
+                         const std::array<std::uint32_t, 4>& t) {
+  const std::uint64_t l[4] = {lim[t[0]], lim[t[1]], lim[t[2]], lim[t[3]]};
+  unsigned faces = 0xF;
+  std::size_t e = 0;
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::size_t j = i + 1; j < 4; ++j, ++e)
       // The edge lies on the faces opposite the other two vertices.
-      if (256 * d2 > std::min(l[i], l[j])) faces &= (1u << i) | (1u << j);
-    }
+      if (256 * std::uint64_t{d2[e]} > std::min(l[i], l[j])) faces &= (1u << i) | (1u << j);
   return faces;
 }
 
@@ -777,15 +786,37 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
   return scale;
 }
 
+TetEdgeLengths::TetEdgeLengths(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
+                               HelperBudget* helpers)
+{
+  // Every squared length below 2^32: 3·extent² < 2^32 on the largest extent.
+  std::array<std::uint32_t, 3> lo{~0u, ~0u, ~0u}, hi{0, 0, 0};
+  for (const GridPoint& p : points)
+    for (std::size_t a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  std::uint64_t extent = 0;
+  for (std::size_t a = 0; a < 3 && !points.empty(); ++a) extent = std::max<std::uint64_t>(extent, hi[a] - lo[a]);
+  if (3 * extent * extent >= (std::uint64_t{1} << 32)) return;
+  d2.resize(dt.tets.size());
+  split_range(helpers, dt.tets.size(), kSplitElements, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) {
+      const auto e = edge_lengths(points, dt.tets[t]);
+      for (std::size_t i = 0; i < 6; ++i) d2[t][i] = static_cast<std::uint32_t>(e[i]);
+    }
+  });
+}
+
 std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                           const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                          HelperBudget* helpers, FilterMemo* memo) {
+                                          HelperBudget* helpers, FilterMemo* memo, const TetEdgeLengths* edges) {
   const std::size_t nt = dt.tets.size();
+  const bool cached = edges && !edges->d2.empty();
+  if (cached && edges->d2.size() != nt) fail(Status::internal_error, "candidate_flags: edge lengths of other tetrahedra");
   const auto lim = limits(scale, p);
   std::vector<std::uint8_t> cand(nt * 4);
   split_range(helpers, nt, kSplitElements, [&](std::size_t begin, std::size_t end) {
     for (std::size_t t = begin; t < end; ++t) {
-      const unsigned faces = candidate_faces(points, lim, dt.tets[t]);
+      const unsigned faces = cached ? candidate_faces(edges->d2[t], lim, dt.tets[t])
+                                    : candidate_faces(edge_lengths(points, dt.tets[t]), lim, dt.tets[t]);
       std::memcpy(cand.data() + t * 4, kFaceFlags[faces].data(), 4);
     }
   });
@@ -798,12 +829,12 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
                                       std::vector<std::uint8_t>* cand_out, HelperBudget* helpers,
-                                      FilterMemo* memo) {
+                                      FilterMemo* memo, const TetEdgeLengths* edges) {
   const std::size_t nt = dt.tets.size();
   std::vector<std::uint8_t> inside(nt, 1);
   std::vector<std::uint8_t> own;
   std::vector<std::uint8_t>& cand = cand_out ? *cand_out : own;
-  cand = candidate_flags(points, dt, scale, p, helpers, memo);
+  cand = candidate_flags(points, dt, scale, p, helpers, memo, edges);
 
   // Flood from outside the hull through non-candidate faces.
   std::vector<std::uint32_t> stack;

@@ -122,20 +122,36 @@ struct FilterMemo {
   std::vector<std::uint32_t> max_r, max_ratio;
 };
 
+/// The squared lengths of every tetrahedron's six edges, (0,1), (0,2),
+/// (0,3), (1,2), (1,3), (2,3) by local vertex, which the edge test (spec
+/// 11.2) of every set of parameters compares with the vertices' limits: an
+/// encoder trying many parameters on one level computes them once and
+/// passes them to each call. 24 bytes per tetrahedron, kept only where
+/// every squared length fits in 32 bits (points spanning fewer than 37,837
+/// grid units on each axis, so every q <= 15); otherwise `d2` stays empty
+/// and the calls compute the lengths themselves. Read only: calls on
+/// several threads may share them.
+struct TetEdgeLengths {
+  std::vector<std::array<std::uint32_t, 6>> d2;
+  TetEdgeLengths(const std::vector<GridPoint>& points, const Tetrahedralization& dt, HelperBudget* helpers = nullptr);
+};
+
 /// Candidate flag of every face slot, indexed 4·tetrahedron + local face:
 /// the edge test against the alpha limits (spec 11.2) and the filters
-/// (11.2a). Both slots of a face carry the same flag. `memo`: FilterMemo.
+/// (11.2a). Both slots of a face carry the same flag. `memo`: FilterMemo;
+/// `edges`: TetEdgeLengths of these points and tetrahedra (the same flags).
 std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                           const std::vector<std::uint64_t>& scale, const ReconParams& p,
-                                          HelperBudget* helpers = nullptr, FilterMemo* memo = nullptr);
+                                          HelperBudget* helpers = nullptr, FilterMemo* memo = nullptr,
+                                          const TetEdgeLengths* edges = nullptr);
 
 /// The labels of the rule before toggles (flood from the hull through
 /// non-candidate faces, then peeling); `cand`, when given, receives the
-/// candidate flags (candidate_flags()).
+/// candidate flags (candidate_flags(), with `memo` and `edges`).
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
                                       std::vector<std::uint8_t>* cand = nullptr, HelperBudget* helpers = nullptr,
-                                      FilterMemo* memo = nullptr);
+                                      FilterMemo* memo = nullptr, const TetEdgeLengths* edges = nullptr);
 
 /// The normative repair step (spec 11.4a) on rule labels: greedy local
 /// flips around unsound vertices (surface kind: points off the surface;

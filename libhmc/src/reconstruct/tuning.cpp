@@ -577,10 +577,12 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // instead of 90 %, where exact gives 99.9 %.
   // `memo` (FilterMemo): only for calls made one at a time (the trials
   // evaluated on two threads have no filters).
+  // The edge test's lengths, shared by every trial below (and their helper).
+  const TetEdgeLengths edges(points, dt, in.helpers);
   auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale, std::vector<std::uint8_t>& labels,
                   FilterMemo* memo = nullptr) {
     std::vector<std::uint8_t> cand;
-    labels = rule_labels(points, dt, scale, p, &cand, nullptr, memo);
+    labels = rule_labels(points, dt, scale, p, &cand, nullptr, memo, &edges);
     if (p.repair) {
       repair_labels(dt, kind, labels);
       const std::uint64_t m = approximation_penalty(dt, labels, want_all, in);
@@ -877,7 +879,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
     // many of a tetrahedron's faces are candidates (on the 1-level streams of
     // the shared models, the toggles of the skull, horse and bunny cost 29 to
     // 42 % less).
-    auto cand = candidate_flags(points, dt, best_scale, best, nullptr, &memo);
+    auto cand = candidate_flags(points, dt, best_scale, best, nullptr, &memo, &edges);
     if (report) report->corrections = list.size();
     auto coding = code_toggles(dt, rule, list, cand, true);
     if (coding.by_neighbours) {
