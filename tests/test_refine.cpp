@@ -1228,6 +1228,54 @@ TEST_CASE("the ranked base coder's lattice neighbour search equals a k-d tree's,
   }
 }
 
+TEST_CASE("ChildKeys: the plane's keys handed out beside a quadric's are those of a call with fit 0") {
+  std::mt19937_64 rng(5);
+  int fitted = 0, compared = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int q = 1 + static_cast<int>(rng() % 21);
+    const int d = static_cast<int>(rng() % static_cast<std::uint64_t>(q));
+    const std::uint32_t cells = 1u << d;
+    const GridPoint node{static_cast<std::uint32_t>(rng() % cells), static_cast<std::uint32_t>(rng() % cells),
+                         static_cast<std::uint32_t>(rng() % cells)};
+    const int fit = 6 + static_cast<int>(rng() % (kMaxRankPoints - 5));
+    const int k = 1 + static_cast<int>(rng() % static_cast<std::uint64_t>(fit));
+    const bool with_gaps = trial % 3 != 0;
+    const int gap_from = static_cast<int>(rng() % 2);
+    const std::uint64_t span = std::uint64_t{2} << q;
+    std::vector<Doubled> nb(static_cast<std::size_t>(fit));
+    for (auto& x : nb) {
+      for (std::size_t a = 0; a < 3; ++a) x[a] = static_cast<std::int32_t>(rng() % span);
+      if (trial % 5 == 0) x[2] = x[0];  // on a plane: some fits are singular, some keys tie
+      if (trial % 11 == 0) x[1] = x[0];  // on a line: no quadric
+    }
+    ChildKeys plane;
+    const ChildKeys quadric(node, d, q, nb.data(), k, with_gaps, gap_from, fit, &plane);
+    const ChildKeys alone(node, d, q, nb.data(), k, with_gaps, gap_from, fit);
+    const ChildKeys want(node, d, q, nb.data(), k, with_gaps, gap_from, 0);
+    CHECK(plane.split() == want.split());
+    bool differs = false;
+    for (int gap = 0; gap <= kFarRanking; ++gap) {
+      if (!with_gaps && gap > 0 && gap < kFarRanking) continue;
+      for (unsigned mask : {0u, 0x0Fu, static_cast<unsigned>(rng() % 256)}) {
+        std::array<int, 8> a{}, b{}, c{}, e{};
+        plane.order(mask, gap, a);
+        want.order(mask, gap, b);
+        quadric.order(mask, gap, c);
+        alone.order(mask, gap, e);
+        CHECK(a == b);
+        CHECK(c == e);  // handing out the plane's keys changes nothing in the quadric's
+        differs |= c != b;
+        const unsigned occ = 1 + static_cast<unsigned>(rng() % 255);
+        CHECK(plane.symbol(mask, gap, occ) == want.symbol(mask, gap, occ));
+        ++compared;
+      }
+    }
+    fitted += differs;
+  }
+  CHECK(compared > 10000);
+  CHECK(fitted > 500);  // the quadric did rank otherwise than the plane, often
+}
+
 TEST_CASE("coder 5 (quadric ranking) round trips, and wins where the surface curves within a few spacings") {
   const int q = 12;
   // A thin torus sampled about 6 points across its tube's radius: a plane

@@ -319,8 +319,8 @@ class DepthNodes {
 
   /// The keys of a node ranked by the points nb[0 .. count), with its context.
   ChildKeys keys_of(std::uint64_t node, const std::array<Doubled, kCausalPoints>& nb, int count, bool with_gaps,
-                    bool quadric, int& context) const {
-    ChildKeys out(morton_point(node, d_), d_, q_, nb.data(), count, with_gaps, 1, quadric ? count : 0);
+                    bool quadric, int& context, ChildKeys* plane = nullptr) const {
+    ChildKeys out(morton_point(node, d_), d_, q_, nb.data(), count, with_gaps, 1, quadric ? count : 0, plane);
     const int split = out.split();
     context = split <= 1 ? split : split <= 3 ? 2 : 3;
     return out;
@@ -343,11 +343,16 @@ class DepthNodes {
     std::array<std::uint8_t, 2 * kGapChoices.size()> out{};
     std::array<Doubled, kCausalPoints> nb{};
     const int count = expand(i, near, found, causal, nb);
-    for (const bool quadric : {false, true}) {
-      if (quadric && !causal) break;
-      const ChildKeys k = keys_of(node, nb, count, true, quadric, context);
-      k.symbols(0u, kGapChoices.data(), kGapChoices.size(), occupancy, out.data() + (quadric ? kGapChoices.size() : 0));
+    if (!causal) {
+      keys_of(node, nb, count, true, false, context).symbols(0u, kGapChoices.data(), kGapChoices.size(), occupancy,
+                                                            out.data());
+      return out;
     }
+    // The quadric's keys and, from the same work, the plane's.
+    ChildKeys plane;
+    const ChildKeys quadric = keys_of(node, nb, count, true, true, context, &plane);
+    plane.symbols(0u, kGapChoices.data(), kGapChoices.size(), occupancy, out.data());
+    quadric.symbols(0u, kGapChoices.data(), kGapChoices.size(), occupancy, out.data() + kGapChoices.size());
     return out;
   }
 

@@ -152,7 +152,7 @@ bool fit_quadric(const Doubled* neighbours, int f, const std::array<std::int64_t
 }  // namespace
 
 ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours, int k, bool with_gaps,
-                     int gap_from, int fit) {
+                     int gap_from, int fit, ChildKeys* plane) {
   const std::int64_t h = std::int64_t{1} << (q - d);  // node side
   std::array<std::int64_t, 3> s{0, 0, 0};
   std::array<std::int64_t, 6> ss{};  // xx yy zz xy xz yz
@@ -200,9 +200,11 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   // times a distance along the normal), truncated, at most 2^47.
   const Frame frame = frame_of(n, j);
   std::array<double, 6> coef{};
-  if (fit >= 6 && fit <= kMaxRankPoints && n[j] > 0 &&
-      fit_quadric(neighbours, fit, {2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h,
-                                    2 * std::int64_t{p[2]} * h + h}, frame, coef)) {
+  const std::array<std::int64_t, 8> t_plane = t;
+  const bool quadric = fit >= 6 && fit <= kMaxRankPoints && n[j] > 0 &&
+                       fit_quadric(neighbours, fit, {2 * std::int64_t{p[0]} * h + h, 2 * std::int64_t{p[1]} * h + h,
+                                                     2 * std::int64_t{p[2]} * h + h}, frame, coef);
+  if (quadric) {
     // The children's offsets from the centre are (+-h/2, +-h/2, +-h/2), so
     // their frame coordinates are sums and differences of three columns.
     const std::int64_t half = h / 2;
@@ -221,22 +223,6 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
       t[c] = key < 0x1p47 ? static_cast<std::int64_t>(key) : std::int64_t{1} << 47;
     }
   }
-  // Each child's place in the order by (t_c, e_c, c), the ranking's last
-  // keys whatever the gap weight: the three packed into one integer (t_c
-  // < 2^49 above bit 64, e_c < 2^56 from bit 3, c in bits 0-2).
-  std::array<UInt128, 8> packed{};
-  for (std::size_t c = 0; c < 8; ++c)
-    packed[c] = static_cast<UInt128>(t[c]) << 64 | static_cast<UInt128>(static_cast<std::uint64_t>(e[c]) << 3 | c);
-  const std::array<int, 8> place = ranks_of(packed);
-  for (std::size_t c = 0; c < 8; ++c) tie_[c] = static_cast<std::uint8_t>(place[c]);
-  // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
-  // the squared distance from the child's centre to its nearest neighbour.
-  // t_c / (k |n|) is the child's distance to the plane, so both terms are
-  // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^104.
-  // order() sorts the children by one integer each, (not in the mask, then
-  // kappa_c, then the place by (t, e, c)): kappa_c + 2^106 from bit 3, the
-  // place in bits 0-2, the mask in bit 112; here base_c = that integer for
-  // G = 0 and step_c = its decrease per unit of G.
   // Without `with_gaps` no ranking uses g_c: left 0, the far keys order as
   // (t, e, c), the ranking of spec 8A.8 without neighbours.
   // Per point, the squared offsets along each axis of the children's two
@@ -256,14 +242,45 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
         g[c] = std::min(g[c], sq[0][(c >> 2) & 1] + sq[1][(c >> 1) & 1] + sq[2][c & 1]);
     }
   }
+  const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  const bool gapped = with_gaps && n2 != 0 && gap_from < k;
+  const std::int64_t weight = std::int64_t{k} * k * n2;
+  finish(t, e, g, gapped, weight);
+  if (plane) {
+    // The same keys with the plane's t_c (no quadric): everything else is
+    // what the plane ranking computes too.
+    plane->split_ = split_;
+    if (quadric)
+      plane->finish(t_plane, e, g, gapped, weight);
+    else
+      plane->tie_ = tie_, plane->gapped_ = gapped_, plane->base_ = base_, plane->step_ = step_, plane->far_ = far_;
+  }
+}
+
+void ChildKeys::finish(const std::array<std::int64_t, 8>& t, const std::array<std::int64_t, 8>& e,
+                       const std::array<std::int64_t, 8>& g, bool gapped, std::int64_t weight) {
+  // Each child's place in the order by (t_c, e_c, c), the ranking's last
+  // keys whatever the gap weight: the three packed into one integer (t_c
+  // < 2^49 above bit 64, e_c < 2^56 from bit 3, c in bits 0-2).
+  std::array<UInt128, 8> packed{};
+  for (std::size_t c = 0; c < 8; ++c)
+    packed[c] = static_cast<UInt128>(t[c]) << 64 | static_cast<UInt128>(static_cast<std::uint64_t>(e[c]) << 3 | c);
+  const std::array<int, 8> place = ranks_of(packed);
+  for (std::size_t c = 0; c < 8; ++c) tie_[c] = static_cast<std::uint8_t>(place[c]);
   // Far ranking (spec 8A.8): the larger g_c first, then the place by (t, e,
   // c): 2^47 - g_c (g_c < 3 * 2^44) from bit 3, the place in bits 0-2.
   for (std::size_t c = 0; c < 8; ++c)
     far_[c] = ((std::uint64_t{1} << 47) - static_cast<std::uint64_t>(g[c])) << 3 | tie_[c];
-  const std::int64_t n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-  if (!with_gaps || n2 == 0 || gap_from >= k) return;
-  gapped_ = true;
-  const std::int64_t weight = std::int64_t{k} * k * n2;
+  // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
+  // the squared distance from the child's centre to its nearest neighbour.
+  // t_c / (k |n|) is the child's distance to the plane, so both terms are
+  // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^104.
+  // order() sorts the children by one integer each, (not in the mask, then
+  // kappa_c, then the place by (t, e, c)): kappa_c + 2^106 from bit 3, the
+  // place in bits 0-2, the mask in bit 112; here base_c = that integer for
+  // G = 0 and step_c = its decrease per unit of G.
+  gapped_ = gapped;
+  if (!gapped) return;
   for (std::size_t c = 0; c < 8; ++c) {
     base_[c] = (static_cast<UInt128>(32 * static_cast<Int128>(t[c]) * t[c] + (Int128{1} << 106)) << 3) + tie_[c];
     step_[c] = static_cast<UInt128>(static_cast<Int128>(weight) * g[c]) << 3;

@@ -69,8 +69,11 @@ class ChildKeys {
   /// is well posed; `fit` is at most kMaxRankPoints, and a larger one fits
   /// nothing); `neighbours` then holds max(k, fit) points, of which
   /// the plane and the gaps use the first k.
+  /// `plane`, when given, also receives the keys of the same call with fit
+  /// 0 (the plane's), from the work the two share.
   ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps, int gap_from = 0,
-            int fit = 0);
+            int fit = 0, ChildKeys* plane = nullptr);
+  ChildKeys() = default;
   /// How many children lie on the smaller side of the fitted plane (0 to 4).
   int split() const { return split_; }
   /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;
@@ -88,6 +91,9 @@ class ChildKeys {
 
  private:
   __extension__ typedef unsigned __int128 UInt128;
+  /// The keys from t_c, e_c and g_c (the constructor's last step).
+  void finish(const std::array<std::int64_t, 8>& t, const std::array<std::int64_t, 8>& e,
+              const std::array<std::int64_t, 8>& g, bool gapped, std::int64_t weight);
   /// Each child's sort key for weight `gap`: (not in first_mask, then the
   /// weight's key), distinct across the children.
   void keys(unsigned first_mask, int gap, std::array<UInt128, 8>& out) const;

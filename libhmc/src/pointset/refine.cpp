@@ -179,8 +179,15 @@ class CoarseLevel {
     gaps_ = gaps;
     with_gaps_ = others || std::any_of(gaps.begin(), gaps.end(), [](int g) { return g > 0; });
   }
-  /// The keys of the node ranked last.
+  /// With `on`, rank() also keeps the plane's keys of each node it ranks
+  /// with a quadric (those of fit 0, the same neighbours): one traversal
+  /// then gives the symbols of both rankings.
+  void set_twin(bool on) { twin_ = on; }
+  /// The gap weight depth d ranks with.
+  int gap(int d) const { return gaps_[static_cast<std::size_t>(d)]; }
+  /// The keys of the node ranked last, and (set_twin) its plane's keys.
   const ChildKeys& last_keys() const { return last_; }
+  const ChildKeys& last_plane_keys() const { return last_plane_; }
 
   /// Boundaries of the coarse points of the eight children of a node at
   /// depth d holding keys_[c0, c1): child c holds keys_[b[c], b[c + 1]).
@@ -211,7 +218,8 @@ class CoarseLevel {
     std::array<Point32, kMaxNeighbours> nb{};
     for (int i = 0; i < found; ++i)
       nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
-    last_ = ChildKeys(p, d, q_, nb.data(), std::min(found, neighbours_), with_gaps_, 0, std::min(found, fit_));
+    last_ = ChildKeys(p, d, q_, nb.data(), std::min(found, neighbours_), with_gaps_, 0, std::min(found, fit_),
+                      twin_ ? &last_plane_ : nullptr);
     last_.order(coarse_mask, gaps_[static_cast<std::size_t>(d)], order);
     if (split) *split = last_.split();
     return handed;
@@ -256,8 +264,8 @@ class CoarseLevel {
   int q_;
   int neighbours_ = 0, fit_ = 0;
   std::vector<int> gaps_ = std::vector<int>(static_cast<std::size_t>(q_), 0);
-  bool with_gaps_ = false;
-  ChildKeys last_{{0, 0, 0}, 0, 1, nullptr, 0, false};
+  bool with_gaps_ = false, twin_ = false;
+  ChildKeys last_{{0, 0, 0}, 0, 1, nullptr, 0, false}, last_plane_;
   NeighbourIndex index_;
   std::vector<std::uint64_t> keys_;  // Morton keys of the coarse points, ascending
   std::array<NeighbourIndex::Hit, kMaxNeighbours> hits_{};
@@ -307,15 +315,26 @@ class Traversal {
  public:
   static constexpr std::size_t kMaxWeights = kFarRanking + 1;  // weights 0 ... kFarRanking, each at most once
 
-  Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q, const std::vector<int>& gaps = {})
-      : coarse_(coarse), added_(added), q_(q), gaps_(gaps) {
+  /// `twin` (the coarse level set_twin()): the traversal also keeps the
+  /// plane's symbols, counts and others, which swap_twin() trades for its own.
+  Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q, const std::vector<int>& gaps = {},
+            bool twin = false)
+      : coarse_(coarse), added_(added), q_(q), gaps_(gaps), twin_(twin) {
     if (gaps.size() > kMaxWeights) fail(Status::internal_error, "refinement: too many ranking weights to count");
     counts.assign(gaps.size(), std::vector<std::uint64_t>(static_cast<std::size_t>(q) * 18 * kAlphabet, 0));
+    if (twin) twin_counts_ = counts;
     visit(0, 0, 0, coarse.size(), 0, static_cast<std::uint32_t>(added.size()), nullptr);
   }
   std::vector<Symbol> symbols;
   std::vector<std::vector<std::uint64_t>> counts;
   std::vector<std::uint8_t> other;
+
+  /// Trades symbols, counts and other with the plane's (a twin traversal).
+  void swap_twin() {
+    symbols.swap(twin_symbols_);
+    counts.swap(twin_counts_);
+    other.swap(twin_other_);
+  }
 
   /// Turns `symbols` into those a traversal ranked with weight chosen[d] at
   /// depth d would give, where each chosen[d] is the weight this one ranked
@@ -367,6 +386,19 @@ class Traversal {
       ++counts[j][row * kAlphabet + s[j]];
       other.push_back(s[j]);
     }
+    if (twin_) {
+      // The plane's: the same node, context and plane context (the split is
+      // the plane's in both), its own symbols.
+      const ChildKeys& plane = coarse_.last_plane_keys();
+      Symbol mine = symbol;
+      mine.index = plane.symbol(mask, coarse_.gap(d), occ);
+      twin_symbols_.push_back(mine);
+      plane.symbols(mask, gaps_.data(), gaps_.size(), occ, s.data());
+      for (std::size_t j = 0; j < gaps_.size(); ++j) {
+        ++twin_counts_[j][row * kAlphabet + s[j]];
+        twin_other_.push_back(s[j]);
+      }
+    }
     if (d + 1 == q_) return;
     for (std::size_t c = 0; c < 8; ++c)
       if (occ & (1u << c)) visit(d + 1, (key << 3) | c, cb[c], cb[c + 1], ab[c], ab[c + 1], handed);
@@ -376,6 +408,10 @@ class Traversal {
   const std::vector<std::uint64_t>& added_;
   int q_;
   std::vector<int> gaps_;
+  bool twin_ = false;
+  std::vector<Symbol> twin_symbols_;
+  std::vector<std::vector<std::uint64_t>> twin_counts_;
+  std::vector<std::uint8_t> twin_other_;
 };
 
 // Which table each (depth, class, plane context) slot uses. Per class and
@@ -664,10 +700,10 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   // weight at all depths (coder 3), and for each depth's best weight (coder
   // 4), are compared without symbols; a better ranking is then traversed
   // again for its symbols.
-  const auto trial = [&](int neighbours, int fit, const std::vector<int>& gaps, const std::vector<int>& others) {
-    level.set_neighbours(neighbours, fit);
-    level.set_gaps(gaps, !others.empty());
-    Traversal traversal(level, added, q, others);
+  // The plans of one traversal's symbols (ranked with neighbours, fit and
+  // gaps, counted for `others`), kept in `best` when smaller.
+  const auto evaluate = [&](Traversal& traversal, int neighbours, int fit, const std::vector<int>& gaps,
+                            const std::vector<int>& others) {
     std::vector<std::uint64_t> freq(static_cast<std::size_t>(q) * depth_rows, 0);
     for (const Symbol& s : traversal.symbols)
       ++freq[((static_cast<std::size_t>(s.depth) * 9 + s.weight) * 2 + s.plane) * kAlphabet + s.index];
@@ -714,11 +750,19 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
       // The symbols of the weights chosen: kept by the traversal (the
       // same as ranking again with them).
       if (better && !traversal.rank_with(gaps, plan.gaps)) {
+        level.set_neighbours(neighbours, fit);
+        level.set_twin(false);
         level.set_gaps(plan.gaps);
         traversal.symbols = Traversal(level, added, q).symbols;
       }
       best = Trial{neighbours, std::move(plan), std::move(traversal.symbols)};
     }
+  };
+  const auto trial = [&](int neighbours, int fit, const std::vector<int>& gaps, const std::vector<int>& others) {
+    level.set_neighbours(neighbours, fit);
+    level.set_gaps(gaps, !others.empty());
+    Traversal traversal(level, added, q, others);
+    evaluate(traversal, neighbours, fit, gaps, others);
   };
   const std::vector<int> none(static_cast<std::size_t>(q), 0);
   if (forced) {
@@ -733,8 +777,21 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     // quadric through 10 neighbours, with the same weights.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
     const std::vector<int> weights{1, 2, 3, 4, 6, 8, 12, kFarRanking};
-    trial(neighbours, 0, none, all_coders && neighbours >= 2 ? weights : std::vector<int>{});
-    if (all_coders && coarse.size() >= 6) trial(neighbours, kQuadricNeighbours, none, weights);
+    if (all_coders && coarse.size() >= 6) {
+      // The plane's trial and the quadric's from one traversal: the plane
+      // through the first 4 of the quadric's 10 neighbours is the plane's own.
+      level.set_neighbours(neighbours, kQuadricNeighbours);
+      level.set_gaps(none, true);
+      level.set_twin(true);
+      Traversal traversal(level, added, q, weights, true);
+      level.set_twin(false);
+      traversal.swap_twin();
+      evaluate(traversal, neighbours, 0, none, weights);
+      traversal.swap_twin();
+      evaluate(traversal, neighbours, kQuadricNeighbours, none, weights);
+    } else {
+      trial(neighbours, 0, none, all_coders && neighbours >= 2 ? weights : std::vector<int>{});
+    }
     // Where far ranking won (volume interiors: added points sit in the holes
     // between coarse points), the nearest of more neighbours marks the
     // holes better.
