@@ -257,7 +257,7 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   }
 }
 
-void ChildKeys::finish(const std::array<std::int64_t, 8>& t, const std::array<std::int64_t, 8>& e,
+__attribute__((always_inline)) inline void ChildKeys::finish(const std::array<std::int64_t, 8>& t, const std::array<std::int64_t, 8>& e,
                        const std::array<std::int64_t, 8>& g, bool gapped, std::int64_t weight) {
   // Each child's place in the order by (t_c, e_c, c), the ranking's last
   // keys whatever the gap weight: the three packed into one integer (t_c

@@ -29,11 +29,6 @@ std::vector<std::uint64_t> limits(const std::vector<std::uint64_t>& scale, const
   return lim;
 }
 
-// Candidate flags of the four faces of tetrahedron t (bit k: the face
-// opposite vertex k): a face is a candidate when each of its edges (u, v)
-// has 256·|uv|² <= min(lim[u], lim[v]). Each of the six edges is tested
-// once and shared by its two faces; the four points and limits are read
-// once.
 // The squared lengths of a tetrahedron's six edges, in the order of
 // TetEdgeLengths.
 std::array<std::uint64_t, 6> edge_lengths(const std::vector<GridPoint>& pts, const std::array<std::uint32_t, 4>& t) {
@@ -53,16 +48,45 @@ std::array<std::uint64_t, 6> edge_lengths(const std::vector<GridPoint>& pts, con
   return out;
 }
 
-template <typename Length>
-unsigned candidate_faces(const std::array<Length, 6>& d2, const std::vector<std::uint64_t>& lim,
+// Candidate flags of the four faces of tetrahedron t (bit k: the face
+// opposite vertex k): a face is a candidate when each of its edges (u, v)
+// has 256·|uv|² <= min(lim[u], lim[v]). Each of the six edges is tested
+// once and shared by its two faces; the four limits are read once. Here
+// with the lengths given (TetEdgeLengths)...
+unsigned candidate_faces(const std::array<std::uint32_t, 6>& d2, const std::vector<std::uint64_t>& lim,
                          const std::array<std::uint32_t, 4>& t) {
   const std::uint64_t l[4] = {lim[t[0]], lim[t[1]], lim[t[2]], lim[t[3]]};
   unsigned faces = 0xF;
   std::size_t e = 0;
   for (std::size_t i = 0; i < 4; ++i)
     for (std::size_t j = i + 1; j < 4; ++j, ++e)
-      // The edge lies on the faces opposite the other two vertices.
       if (256 * std::uint64_t{d2[e]} > std::min(l[i], l[j])) faces &= (1u << i) | (1u << j);
+  return faces;
+}
+
+// ... and here without them: each length computed where it is compared
+// (the decoder's one call per level; measured faster than computing the six
+// first).
+unsigned candidate_faces(const std::vector<GridPoint>& pts, const std::vector<std::uint64_t>& lim,
+                         const std::array<std::uint32_t, 4>& t) {
+  std::int64_t x[4][3];
+  std::uint64_t l[4];
+  for (std::size_t i = 0; i < 4; ++i) {
+    const GridPoint& p = pts[t[i]];
+    for (std::size_t a = 0; a < 3; ++a) x[i][a] = p[a];
+    l[i] = lim[t[i]];
+  }
+  unsigned faces = 0xF;
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::size_t j = i + 1; j < 4; ++j) {
+      std::uint64_t d2 = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        const std::int64_t d = x[i][a] - x[j][a];
+        d2 += static_cast<std::uint64_t>(d * d);
+      }
+      // The edge lies on the faces opposite the other two vertices.
+      if (256 * d2 > std::min(l[i], l[j])) faces &= (1u << i) | (1u << j);
+    }
   return faces;
 }
 
@@ -814,11 +838,12 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
   const auto lim = limits(scale, p);
   std::vector<std::uint8_t> cand(nt * 4);
   split_range(helpers, nt, kSplitElements, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t) {
-      const unsigned faces = cached ? candidate_faces(edges->d2[t], lim, dt.tets[t])
-                                    : candidate_faces(edge_lengths(points, dt.tets[t]), lim, dt.tets[t]);
-      std::memcpy(cand.data() + t * 4, kFaceFlags[faces].data(), 4);
-    }
+    if (cached)
+      for (std::size_t t = begin; t < end; ++t)
+        std::memcpy(cand.data() + t * 4, kFaceFlags[candidate_faces(edges->d2[t], lim, dt.tets[t])].data(), 4);
+    else
+      for (std::size_t t = begin; t < end; ++t)
+        std::memcpy(cand.data() + t * 4, kFaceFlags[candidate_faces(points, lim, dt.tets[t])].data(), 4);
   });
   bool any_filter = false;
   for (auto f : p.filters) any_filter |= f != 0;
