@@ -257,8 +257,10 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
   }
 }
 
-__attribute__((always_inline)) inline void ChildKeys::finish(const std::array<std::int64_t, 8>& t, const std::array<std::int64_t, 8>& e,
-                       const std::array<std::int64_t, 8>& g, bool gapped, std::int64_t weight) {
+__attribute__((always_inline)) inline void ChildKeys::finish(const std::array<std::int64_t, 8>& t,
+                                                             const std::array<std::int64_t, 8>& e,
+                                                             const std::array<std::int64_t, 8>& g, bool gapped,
+                                                             std::int64_t weight) {
   // Each child's place in the order by (t_c, e_c, c), the ranking's last
   // keys whatever the gap weight: the three packed into one integer (t_c
   // < 2^49 above bit 64, e_c < 2^56 from bit 3, c in bits 0-2).

@@ -73,6 +73,7 @@ class ChildKeys {
   /// 0 (the plane's), from the work the two share.
   ChildKeys(const GridPoint& node, int d, int q, const Doubled* neighbours, int k, bool with_gaps, int gap_from = 0,
             int fit = 0, ChildKeys* plane = nullptr);
+  /// No keys yet: a place for the `plane` keys of another call.
   ChildKeys() = default;
   /// How many children lie on the smaller side of the fitted plane (0 to 4).
   int split() const { return split_; }

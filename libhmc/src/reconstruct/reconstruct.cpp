@@ -811,8 +811,7 @@ std::vector<std::uint64_t> local_scale(const std::vector<GridPoint>& points, con
 }
 
 TetEdgeLengths::TetEdgeLengths(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
-                               HelperBudget* helpers)
-{
+                               HelperBudget* helpers) {
   // Every squared length below 2^32: 3·extent² < 2^32 on the largest extent.
   std::array<std::uint32_t, 3> lo{~0u, ~0u, ~0u}, hi{0, 0, 0};
   for (const GridPoint& p : points)
@@ -834,7 +833,8 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
                                           HelperBudget* helpers, FilterMemo* memo, const TetEdgeLengths* edges) {
   const std::size_t nt = dt.tets.size();
   const bool cached = edges && !edges->d2.empty();
-  if (cached && edges->d2.size() != nt) fail(Status::internal_error, "candidate_flags: edge lengths of other tetrahedra");
+  if (cached && edges->d2.size() != nt)
+    fail(Status::internal_error, "candidate_flags: edge lengths of other tetrahedra");
   const auto lim = limits(scale, p);
   std::vector<std::uint8_t> cand(nt * 4);
   split_range(helpers, nt, kSplitElements, [&](std::size_t begin, std::size_t end) {

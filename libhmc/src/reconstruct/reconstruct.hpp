@@ -127,7 +127,7 @@ struct FilterMemo {
 /// 11.2) of every set of parameters compares with the vertices' limits: an
 /// encoder trying many parameters on one level computes them once and
 /// passes them to each call. 24 bytes per tetrahedron, kept only where
-/// every squared length fits in 32 bits (points spanning fewer than 37,837
+/// every squared length fits in 32 bits (points spanning at most 37,837
 /// grid units on each axis, so every q <= 15); otherwise `d2` stays empty
 /// and the calls compute the lengths themselves. Read only: calls on
 /// several threads may share them.

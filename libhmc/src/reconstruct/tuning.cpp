@@ -559,6 +559,8 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   }
 
   const std::vector<std::uint8_t> want_all(n, kind == Kind::surface ? 1 : 0);
+  // The edge test's lengths, shared by every trial below (and their helper).
+  const TetEdgeLengths edges(points, dt, in.helpers);
   // What parameters p leave to correct: the rule's labels that differ from
   // the truth or, on a coarser level that relies on the decoder's repair,
   // what the repair cannot mend.
@@ -577,8 +579,6 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // instead of 90 %, where exact gives 99.9 %.
   // `memo` (FilterMemo): only for calls made one at a time (the trials
   // evaluated on two threads have no filters).
-  // The edge test's lengths, shared by every trial below (and their helper).
-  const TetEdgeLengths edges(points, dt, in.helpers);
   auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale, std::vector<std::uint8_t>& labels,
                   FilterMemo* memo = nullptr) {
     std::vector<std::uint8_t> cand;
