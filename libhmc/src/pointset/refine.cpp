@@ -180,14 +180,16 @@ class CoarseLevel {
     with_gaps_ = others || std::any_of(gaps.begin(), gaps.end(), [](int g) { return g > 0; });
   }
   /// With `on`, rank() also keeps the plane's keys of each node it ranks
-  /// with a quadric (those of fit 0, the same neighbours): one traversal
-  /// then gives the symbols of both rankings.
+  /// with a quadric (those of fit 0, the same neighbours) and the keys of
+  /// its nearest neighbour alone (1 neighbour, no gaps): one traversal then
+  /// gives the symbols of the three rankings.
   void set_twin(bool on) { twin_ = on; }
   /// The gap weight depth d ranks with.
   int gap(int d) const { return gaps_[static_cast<std::size_t>(d)]; }
   /// The keys of the node ranked last, and (set_twin) its plane's keys.
   const ChildKeys& last_keys() const { return last_; }
   const ChildKeys& last_plane_keys() const { return last_plane_; }
+  const ChildKeys& last_nearest_keys() const { return last_nearest_; }
 
   /// Boundaries of the coarse points of the eight children of a node at
   /// depth d holding keys_[c0, c1): child c holds keys_[b[c], b[c + 1]).
@@ -220,6 +222,7 @@ class CoarseLevel {
       nb[static_cast<std::size_t>(i)] = index_.at(hits_[static_cast<std::size_t>(i)].slot);
     last_ = ChildKeys(p, d, q_, nb.data(), std::min(found, neighbours_), with_gaps_, 0, std::min(found, fit_),
                       twin_ ? &last_plane_ : nullptr);
+    if (twin_) last_nearest_ = ChildKeys(p, d, q_, nb.data(), std::min(found, 1), false);
     last_.order(coarse_mask, gaps_[static_cast<std::size_t>(d)], order);
     if (split) *split = last_.split();
     return handed;
@@ -265,7 +268,7 @@ class CoarseLevel {
   int neighbours_ = 0, fit_ = 0;
   std::vector<int> gaps_ = std::vector<int>(static_cast<std::size_t>(q_), 0);
   bool with_gaps_ = false, twin_ = false;
-  ChildKeys last_{{0, 0, 0}, 0, 1, nullptr, 0, false}, last_plane_;
+  ChildKeys last_{{0, 0, 0}, 0, 1, nullptr, 0, false}, last_plane_, last_nearest_;
   NeighbourIndex index_;
   std::vector<std::uint64_t> keys_;  // Morton keys of the coarse points, ascending
   std::array<NeighbourIndex::Hit, kMaxNeighbours> hits_{};
@@ -316,7 +319,8 @@ class Traversal {
   static constexpr std::size_t kMaxWeights = kFarRanking + 1;  // weights 0 ... kFarRanking, each at most once
 
   /// `twin` (the coarse level set_twin()): the traversal also keeps the
-  /// plane's symbols, counts and others, which swap_twin() trades for its own.
+  /// plane's symbols, counts and others, which swap_twin() trades for its
+  /// own, and the nearest neighbour's symbols (nearest()).
   Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q, const std::vector<int>& gaps = {},
             bool twin = false)
       : coarse_(coarse), added_(added), q_(q), gaps_(gaps), twin_(twin) {
@@ -335,6 +339,9 @@ class Traversal {
     counts.swap(twin_counts_);
     other.swap(twin_other_);
   }
+  /// The traversal ranked by the nearest neighbour alone, without weights to
+  /// count (a twin traversal's; its symbols are moved out).
+  Traversal nearest() { return Traversal(coarse_, added_, q_, std::move(nearest_symbols_)); }
 
   /// Turns `symbols` into those a traversal ranked with weight chosen[d] at
   /// depth d would give, where each chosen[d] is the weight this one ranked
@@ -393,6 +400,9 @@ class Traversal {
       Symbol mine = symbol;
       mine.index = plane.symbol(mask, coarse_.gap(d), occ);
       twin_symbols_.push_back(mine);
+      // The nearest point's: no plane (its split is 0), no weight.
+      nearest_symbols_.push_back(
+          {symbol.depth, symbol.weight, coarse_.last_nearest_keys().symbol(mask, 0, occ), plane_context(0)});
       plane.symbols(mask, gaps_.data(), gaps_.size(), occ, s.data());
       for (std::size_t j = 0; j < gaps_.size(); ++j) {
         ++twin_counts_[j][row * kAlphabet + s[j]];
@@ -412,6 +422,10 @@ class Traversal {
   std::vector<Symbol> twin_symbols_;
   std::vector<std::vector<std::uint64_t>> twin_counts_;
   std::vector<std::uint8_t> twin_other_;
+  std::vector<Symbol> nearest_symbols_;
+  // nearest(): a traversal's symbols, known without visiting.
+  Traversal(CoarseLevel& coarse, const std::vector<std::uint64_t>& added, int q, std::vector<Symbol>&& known)
+      : symbols(std::move(known)), coarse_(coarse), added_(added), q_(q) {}
 };
 
 // Which table each (depth, class, plane context) slot uses. Per class and
@@ -777,14 +791,17 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     // quadric through 10 neighbours, with the same weights.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
     const std::vector<int> weights{1, 2, 3, 4, 6, 8, 12, kFarRanking};
+    std::optional<Traversal> nearest;  // the last trial's symbols, when known from the first traversal
     if (all_coders && coarse.size() >= 6) {
-      // The plane's trial and the quadric's from one traversal: the plane
-      // through the first 4 of the quadric's 10 neighbours is the plane's own.
+      // The plane's trial, the quadric's and the nearest point's from one
+      // traversal: the plane through the first 4 of the quadric's 10
+      // neighbours is the plane's own, and the first of them the nearest.
       level.set_neighbours(neighbours, kQuadricNeighbours);
       level.set_gaps(none, true);
       level.set_twin(true);
       Traversal traversal(level, added, q, weights, true);
       level.set_twin(false);
+      nearest.emplace(traversal.nearest());
       traversal.swap_twin();
       evaluate(traversal, neighbours, 0, none, weights);
       traversal.swap_twin();
@@ -796,7 +813,8 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     // between coarse points), the nearest of more neighbours marks the
     // holes better.
     if (all_coders && coder_of(best->plan) == OctreeCoder::far) trial(kFarNeighbours, 0, none, weights);
-    if (neighbours != 1) trial(1, 0, none, {});
+    if (nearest) evaluate(*nearest, 1, 0, none, {});
+    else if (neighbours != 1) trial(1, 0, none, {});
   }
   if (forced && forced->paired) {
     pair_tables(best->symbols, best->plan, true);
