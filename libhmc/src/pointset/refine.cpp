@@ -186,7 +186,8 @@ class CoarseLevel {
   void set_twin(bool on) { twin_ = on; }
   /// The gap weight depth d ranks with.
   int gap(int d) const { return gaps_[static_cast<std::size_t>(d)]; }
-  /// The keys of the node ranked last, and (set_twin) its plane's keys.
+  /// The keys of the node ranked last, and (set_twin) its plane's and its
+  /// nearest point's keys.
   const ChildKeys& last_keys() const { return last_; }
   const ChildKeys& last_plane_keys() const { return last_plane_; }
   const ChildKeys& last_nearest_keys() const { return last_nearest_; }
