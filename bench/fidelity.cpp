@@ -3,7 +3,7 @@
 // with reconstruction side information, decode, and compare the decoded
 // connectivity with the input's own. Prints one JSON object.
 //
-// usage: fidelity MODEL [--bits Q] [--fidelity rule|shape|exact]
+// usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact]
 //                       [--levels L] [--vq-bits B] [--vq-residual S]
 //
 // With --levels or --vq-bits (issue 7, lossy streams) the model goes through
@@ -37,6 +37,15 @@ using namespace hmc;
 using namespace hmc::detail;
 
 namespace {
+
+const char* fidelity_name(Fidelity f) {
+  switch (f) {
+    case Fidelity::rule: return "rule";
+    case Fidelity::topology: return "topology";
+    case Fidelity::exact: return "exact";
+    default: return "shape";
+  }
+}
 
 using Face = std::array<std::uint32_t, 3>;
 double pct(std::size_t a, std::size_t b) { return 100.0 * static_cast<double>(a) / static_cast<double>(std::max<std::size_t>(b, 1)); }
@@ -221,7 +230,7 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
               "\"levels\": %zu, \"vq_bits\": %d, \"vq_residual\": %u, \"codebook\": %llu, \"bytes\": %zu, "
               "\"input_vertices\": %zu, \"bits_per_input_vertex\": %.3f, \"points_in\": %zu, \"points_out\": %zu, "
               "\"lossy_points\": %llu, \"dropped_points\": %llu, \"points_moved\": %zu, \"decoder_matches_encoder\": %s, ",
-              path, kind_name(kind), fidelity == Fidelity::rule ? "rule" : fidelity == Fidelity::exact ? "exact" : "shape",
+              path, kind_name(kind), fidelity_name(fidelity),
               q, dec.value().levels.size(), vq_bits, vq_residual,
               static_cast<unsigned long long>(e.report.codebook_size), e.bytes.size(), m.points.size(),
               8.0 * double(e.bytes.size()) / double(m.points.size()), in_pts.size(), fin.points.size(),
@@ -281,7 +290,7 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|shape|exact] [--levels L] [--vq-bits B] "
+    std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact] [--levels L] [--vq-bits B] "
                          "[--vq-residual S]\n");
     return 1;
   }
@@ -295,7 +304,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--vq-residual") && i + 1 < argc) vq_residual = std::atol(argv[++i]);
     if (!std::strcmp(argv[i], "--fidelity") && i + 1 < argc) {
       const std::string f = argv[++i];
-      fidelity = f == "rule" ? Fidelity::rule : f == "exact" ? Fidelity::exact : Fidelity::shape;
+      fidelity = f == "rule" ? Fidelity::rule : f == "exact" ? Fidelity::exact : f == "topology" ? Fidelity::topology : Fidelity::shape;
     }
   }
   auto mesh = io::read_mesh(argv[1]);
@@ -359,7 +368,8 @@ int main(int argc, char** argv) {
   ti.border = border;
   ti.surface_points = &gp;
   ti.surface = &surface;
-  if (fidelity == Fidelity::shape && (kind == Kind::volume || border.empty())) {  // as the encoder does
+  if ((fidelity == Fidelity::shape || fidelity == Fidelity::topology) &&
+      (kind == Kind::volume || border.empty())) {  // as the encoder does
     ti.clean_target = true;
     {
       const auto t = topology(in_tris);
@@ -399,7 +409,7 @@ int main(int argc, char** argv) {
   diag = std::sqrt(diag);
 
   std::printf("{\"model\": \"%s\", \"kind\": \"%s\", \"fidelity\": \"%s\", \"points\": %zu, \"dt_tets\": %zu, ", argv[1],
-              kind_name(kind), fidelity == Fidelity::rule ? "rule" : fidelity == Fidelity::exact ? "exact" : "shape",
+              kind_name(kind), fidelity_name(fidelity),
               pts.size(), dt.tets.size());
   const std::size_t rcon_bytes = write_recon(params).size() + kChunkOverhead;
   std::printf("\"filters\": [%u, %u, %u, %u, %u, %u], ", params.filters[0], params.filters[1], params.filters[2],

@@ -206,6 +206,12 @@ def goals_section(rows):
              "The surface has the same shape (see the Hausdorff column) but other triangles; `exact` corrects "
              "them at the side-information cost shown. On the torus every quad is cocircular in the input, so "
              "both diagonals are Delaunay and the rule picks the other one about half the time.")
+    L.append("- *`topology`* is not held to these bars: it gives up input triangles (flat flips, the other "
+             "diagonal of a nearly planar quad) for less side information, at the same components and Euler "
+             "characteristic as `shape` on the closed surfaces. Where the flat flips `shape` leaves would "
+             "change the topology (horse, skull, rocker_arm), `shape` corrects every mismatch and so is "
+             "nearly `exact`; `topology` corrects only the groups of flat flips whose correction changes the "
+             "Euler characteristic.")
     L.append("- *Topology with `exact`* (horse, skull): where input triangles are missing from the Delaunay "
              "(the ceiling), the input's inside/outside labels (winding number) pinch or leave non-manifold "
              "edges; `exact` reproduces them, `shape` mends them by flipping short tetrahedra around the "
@@ -242,7 +248,7 @@ def main():
     ap.add_argument("--fidelity-bin", default=os.path.join(root, "build", "bench", "fidelity"))
     ap.add_argument("--data", default=os.path.join(root, "..", "shared", "data"))
     ap.add_argument("--out", default=None, help="default bench/results/fidelity.md (fidelity-lossy.md with --lossy)")
-    ap.add_argument("--modes", default="rule,shape,exact")
+    ap.add_argument("--modes", default="rule,topology,shape,exact")
     ap.add_argument("--lossy", action="store_true", help="end-to-end report on lossy streams (issue 7)")
     ap.add_argument("--vq-bits", default="0,4,8", help="with --lossy: codebook sizes 2^B to run (0: exact)")
     ap.add_argument("--levels", type=int, default=2, help="with --lossy: levels of detail")
@@ -285,7 +291,10 @@ def main():
              "the others. *Reproduced*: share of the ceiling present in the output. *Side*: the `RCON` chunk "
              "(alpha classes, border list, label toggles) in bits per point. Fidelity settings: `rule` sends "
              "only the rule's parameters; `shape` (the default) also corrects every label that changes the "
-             "shape, the manifoldness or the vertex set; `exact` corrects every label.")
+             "shape, the manifoldness or the vertex set, and every mismatch where the flat ones it leaves "
+             "would change the topology; `topology` corrects what `shape` does but leaves flat flips to the "
+             "rule wherever they keep the topology (correcting only the groups of them that change the Euler "
+             "characteristic); `exact` corrects every label.")
     L.append("")
     L.append("## Surfaces")
     L.append("")

@@ -156,6 +156,12 @@ static void test_encode_options(void) {
   CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_INVALID_ARGUMENT);
   CHECK(strlen(hmc_encoder_message(e)) > 0);
   hmc_encode_options_init(&o);
+  CHECK(o.fidelity == HMC_FIDELITY_SHAPE);
+  o.fidelity = HMC_FIDELITY_TOPOLOGY;
+  CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_OK);
+  o.fidelity = HMC_FIDELITY_TOPOLOGY + 1;
+  CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_INVALID_ARGUMENT);
+  hmc_encode_options_init(&o);
   o.optimizer = 9;
   CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_INVALID_ARGUMENT);
   o.optimizer = HMC_OPTIMIZER_GREEDY;

@@ -101,7 +101,7 @@ TEST_CASE("closed surfaces come back closed, manifold, oriented, with their genu
       {"thin torus", samples::torus(90, 16, 1.0, 0.12), 0},
   };
   for (const auto& c : cases)
-    for (Fidelity f : {Fidelity::shape, Fidelity::exact}) {
+    for (Fidelity f : {Fidelity::topology, Fidelity::shape, Fidelity::exact}) {
       CAPTURE(c.name);
       CAPTURE(static_cast<int>(f));
       const auto d = roundtrip(c.mesh, f);
@@ -113,6 +113,34 @@ TEST_CASE("closed surfaces come back closed, manifold, oriented, with their genu
       CHECK(s.euler == c.euler);
       CHECK(s.vertices_used == lvl.points.size());
     }
+}
+
+TEST_CASE("fidelity topology keeps the flat flips that shape corrects to keep the topology") {
+  // A thin torus whose vertices move by up to 5 % of the spacing: its flat
+  // flips, left to the rule, would change the surface's Euler
+  // characteristic, so shape corrects every mismatch; topology corrects only
+  // the groups of them that change it (and mends defects with fewer
+  // corrections), and gives back as sound a surface of the same genus.
+  Mesh m = samples::torus(180, 32, 1.0, 0.12);
+  std::mt19937_64 rng(7);
+  const double h = 6.283185307179586 / 180;
+  for (auto& p : m.points)
+    for (auto& x : p) x += 0.05 * h * (2.0 * static_cast<double>(rng() >> 11) * 0x1p-53 - 1.0);
+  Encoded shape, topology;
+  roundtrip(m, Fidelity::shape, &shape);
+  const auto d = roundtrip(m, Fidelity::topology, &topology);
+  const auto s = check_surface(d.finest().triangles);
+  CHECK(s.border_edges == 0);
+  CHECK(s.nonmanifold_edges == 0);
+  CHECK(s.misoriented_edges == 0);
+  CHECK(s.euler == 0);
+  CHECK(s.vertices_used == d.finest().points.size());
+  const auto cs = shape.report.levels.back().label_corrections, ct = topology.report.levels.back().label_corrections;
+  CAPTURE(cs);
+  CAPTURE(ct);
+  CHECK(2 * ct < cs);  // measured: 2,871 -> 783
+  CHECK(topology.bytes.size() < shape.bytes.size());
+  CHECK(sorted_faces(topology.triangles) != sorted_faces(shape.triangles));
 }
 
 TEST_CASE("triangles face outward and are Delaunay faces") {

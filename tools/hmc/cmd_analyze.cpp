@@ -471,7 +471,8 @@ int cmd_analyze(int argc, char** argv) {
   if (fid == "rule") eo.fidelity = Fidelity::rule;
   else if (fid == "shape") eo.fidelity = Fidelity::shape;
   else if (fid == "exact") eo.fidelity = Fidelity::exact;
-  else return usage("--fidelity must be rule, shape or exact");
+  else if (fid == "topology") eo.fidelity = Fidelity::topology;
+  else return usage("--fidelity must be rule, topology, shape or exact");
   std::vector<Optimizer> optimizers;
   if (a.has("--optimizer")) {
     const std::string list = a.get("--optimizer");

@@ -82,8 +82,9 @@ int cmd_enc(int argc, char** argv) {
   if (fid == "rule") opt.fidelity = Fidelity::rule;
   else if (fid == "shape") opt.fidelity = Fidelity::shape;
   else if (fid == "exact") opt.fidelity = Fidelity::exact;
+  else if (fid == "topology") opt.fidelity = Fidelity::topology;
   else {
-    std::fprintf(stderr, "hmc enc: --fidelity must be rule, shape or exact\n");
+    std::fprintf(stderr, "hmc enc: --fidelity must be rule, topology, shape or exact\n");
     return kUsage;
   }
   const std::string out = a.has("-o") ? a.get("-o") : a.get("--output");

@@ -41,7 +41,7 @@ const char* kUsage =
     "      --ratio R           share of a level's vertices removed per level, (0,1] (default 0.3)\n"
     "      --boundary M        constant | linear | adaptive Dmax (default linear)\n"
     "      --optimizer O       forward | backward | greedy | best, for volume interiors (default best)\n"
-    "      --fidelity F        rule | shape | exact reconstruction side information (default shape)\n"
+    "      --fidelity F        rule | topology | shape | exact reconstruction side information (default shape)\n"
     "      --vq-bits B         lossy refinement layers: 2^B trained displacement vectors, B = 1..10\n"
     "                          (default 0: exact); the base level stays exact; needs --levels >= 2\n"
     "      --vq-residual S     with --vq-bits: add a residual of step S (every coordinate within S/2;\n"

@@ -67,6 +67,13 @@ enum class Fidelity : std::uint8_t {
               ///< mend where the input's own labels are unsound (edges with more
               ///< than two faces where input triangles are not Delaunay faces)
   exact = 2,  ///< also correct those: the decoded labels equal the input's exactly
+  /// Between rule and shape: what shape corrects, except that flat flips stay
+  /// with the rule even where together they change the surface's topology
+  /// (shape then corrects every one): only the groups of them that change
+  /// the Euler characteristic are corrected. The same components, Euler
+  /// characteristic and soundness as shape, a little further from the input
+  /// (flat flips side by side), fewer of its triangles, less side information.
+  topology = 3,
 };
 
 /// How boundary (surface) vertices are chosen for removal (thesis §3.4.1):

@@ -134,7 +134,8 @@ typedef enum hmc_kind {
 typedef enum hmc_fidelity {
   HMC_FIDELITY_RULE = 0,  /**< only the rule's parameters */
   HMC_FIDELITY_SHAPE = 1, /**< also correct every label that changes the shape (default) */
-  HMC_FIDELITY_EXACT = 2  /**< the decoded labels equal the input's exactly */
+  HMC_FIDELITY_EXACT = 2, /**< the decoded labels equal the input's exactly */
+  HMC_FIDELITY_TOPOLOGY = 3 /**< shape's corrections, but flat flips kept unless they change the topology */
 } hmc_fidelity;
 
 /** How boundary vertices are chosen for removal between levels (Dmax threshold). */

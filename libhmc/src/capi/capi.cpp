@@ -230,7 +230,7 @@ hmc_status hmc_encoder_set_options(hmc_encoder* encoder, const hmc_encode_option
       return bad("levels must be between 1 and 64, got " + std::to_string(o->levels));
     if (!(o->removal_ratio > 0 && o->removal_ratio <= 1)) return bad("removal_ratio must be in (0, 1]");
     if (o->kind < HMC_KIND_AUTO || o->kind > HMC_KIND_VOLUME) return bad("unknown kind " + std::to_string(o->kind));
-    if (o->fidelity < 0 || o->fidelity > 2) return bad("unknown fidelity " + std::to_string(o->fidelity));
+    if (o->fidelity < 0 || o->fidelity > 3) return bad("unknown fidelity " + std::to_string(o->fidelity));
     if (o->boundary_mode < 0 || o->boundary_mode > 2)
       return bad("unknown boundary mode " + std::to_string(o->boundary_mode));
     if (o->optimizer < 0 || o->optimizer > 3) return bad("unknown optimizer " + std::to_string(o->optimizer));

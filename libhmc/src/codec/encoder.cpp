@@ -151,7 +151,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   // Coarser levels only approximate the input; exact fidelity still follows it.
   ti.approximate = coarser && fidelity != Fidelity::exact;
   const bool closed = kind == Kind::volume || fine.border.empty();
-  if (!ti.approximate && (lossy || (fidelity == Fidelity::shape && closed))) {
+  if (!ti.approximate && (lossy || ((fidelity == Fidelity::shape || fidelity == Fidelity::topology) && closed))) {
     // The target can be unsound (a lossy level's carried surface folds where
     // points moved; input triangles missing from the Delaunay leave pinches
     // and non-manifold edges): tuning mends the labels it gives and aims at
