@@ -115,6 +115,15 @@ unsigned threads_option(Args& a) {
   return static_cast<unsigned>(a.get_int("--threads", std::thread::hardware_concurrency() >= 2 ? 2 : 1, 1, 1024));
 }
 
+bool parse_fidelity(const std::string& name, Fidelity& out) {
+  if (name == "rule") out = Fidelity::rule;
+  else if (name == "topology") out = Fidelity::topology;
+  else if (name == "shape") out = Fidelity::shape;
+  else if (name == "exact") out = Fidelity::exact;
+  else return false;
+  return true;
+}
+
 std::string json_escape(const std::string& s) {
   std::string o = "\"";
   for (unsigned char c : s) {

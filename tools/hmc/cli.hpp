@@ -83,6 +83,10 @@ bool exists(const std::string& path);
 /// output is the same either way.
 unsigned threads_option(Args& a);
 
+/// The `--fidelity` names of enc and analyze: rule, topology, shape, exact.
+/// False (and `out` untouched) for any other name.
+bool parse_fidelity(const std::string& name, Fidelity& out);
+
 /// A tiny JSON writer producing one object, keys in insertion order.
 class Json {
  public:

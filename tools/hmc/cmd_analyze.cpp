@@ -468,11 +468,7 @@ int cmd_analyze(int argc, char** argv) {
   else if (bm == "adaptive") eo.boundary_mode = BoundaryMode::adaptive;
   else return usage("--boundary must be constant, linear or adaptive");
   const std::string fid = a.get("--fidelity", "shape");
-  if (fid == "rule") eo.fidelity = Fidelity::rule;
-  else if (fid == "shape") eo.fidelity = Fidelity::shape;
-  else if (fid == "exact") eo.fidelity = Fidelity::exact;
-  else if (fid == "topology") eo.fidelity = Fidelity::topology;
-  else return usage("--fidelity must be rule, topology, shape or exact");
+  if (!parse_fidelity(fid, eo.fidelity)) return usage("--fidelity must be rule, topology, shape or exact");
   std::vector<Optimizer> optimizers;
   if (a.has("--optimizer")) {
     const std::string list = a.get("--optimizer");

@@ -79,11 +79,7 @@ int cmd_enc(int argc, char** argv) {
     return kUsage;
   }
   const std::string fid = a.get("--fidelity", "shape");
-  if (fid == "rule") opt.fidelity = Fidelity::rule;
-  else if (fid == "shape") opt.fidelity = Fidelity::shape;
-  else if (fid == "exact") opt.fidelity = Fidelity::exact;
-  else if (fid == "topology") opt.fidelity = Fidelity::topology;
-  else {
+  if (!parse_fidelity(fid, opt.fidelity)) {
     std::fprintf(stderr, "hmc enc: --fidelity must be rule, topology, shape or exact\n");
     return kUsage;
   }

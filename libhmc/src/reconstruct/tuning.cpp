@@ -287,8 +287,8 @@ std::vector<std::uint32_t> topology_mismatches(const Tetrahedralization& dt, con
     return after && member[t] ? truth[t] : labels[t];
   };
   auto face_on = [&](std::uint32_t t, int k, bool after) { return label(t, after) != label(dt.neighbors[t][k], after); };
-  // Whether the interface has a face of a tetrahedron around v (around the
-  // edge a-b when b is given) that contains it.
+  // Whether the interface has a face containing vertex v (vertex_on), or
+  // the edge a-b (edge_on).
   auto vertex_on = [&](std::uint32_t v, bool after) {
     for (std::uint32_t i = vt.start[v]; i < vt.start[v + 1]; ++i) {
       const std::uint32_t t = vt.incident[i];

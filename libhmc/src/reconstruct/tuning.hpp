@@ -126,9 +126,9 @@ struct TuneInput {
 /// Side information for `in.truth`: alpha classes, peeling, the border
 /// list, toggles for the labels the rule still gets wrong — all of them
 /// (Fidelity::exact), all but flat tetrahedra thinner than 0.1% of the
-/// bounding-box diagonal (Fidelity::shape, Fidelity::topology: unless they
-/// make the topology differ, see tune()'s comments), or none
-/// (Fidelity::rule) — and,
+/// bounding-box diagonal (Fidelity::shape, unless they change the topology;
+/// Fidelity::topology, except the groups of them that change the Euler
+/// characteristic: see tune()'s comments), or none (Fidelity::rule) — and,
 /// for open surfaces, the faces that stray more than 0.1% of the diagonal
 /// from the input (hole caps). Without truth: default parameters.
 ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization& dt, Kind kind, const TuneInput& in,
