@@ -13,6 +13,7 @@
 #include "hmc/codec.hpp"
 #include "samples.hpp"
 #include "support/temp_dir.hpp"
+#include "support/why.hpp"
 #include "util/bytes.hpp"
 
 using namespace hmc;
@@ -43,7 +44,7 @@ std::set<GridPoint> expected_set(const Mesh& m, int q) {
 
 Decoded decode_ok(const std::vector<std::uint8_t>& b, const DecodeOptions& o = {}) {
   auto d = decode(b.data(), b.size(), o);
-  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
   return std::move(d).value();
 }
 
@@ -53,7 +54,7 @@ Status decode_status(const std::vector<std::uint8_t>& b, const DecodeOptions& o 
 
 void check_round_trip(const Mesh& m, int q) {
   auto e = encode(m, EncodeOptions{q, std::nullopt, true});
-  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  REQUIRE_MESSAGE(e.ok(), hmc::testgen::why(e));
   const auto expect = expected_set(m, q);
   auto d = decode_ok(e.value().bytes);
   REQUIRE(d.levels.size() == 1);
@@ -530,11 +531,11 @@ TEST_CASE("limits: working memory, including a tetrahedralization quadratic in i
   eo.bits = 14;
   eo.kind = Kind::surface;
   auto e = encode(lines, eo);
-  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  REQUIRE_MESSAGE(e.ok(), hmc::testgen::why(e));
   const auto& b = e.value().bytes;
   CHECK(b.size() < 2000);
   auto d = decode(b.data(), b.size());
-  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
   CHECK(d.value().finest().points.size() == 600);
 
   // 89,401 tetrahedra at 160 bytes are about 14 MB: 8 MiB is refused, while
@@ -564,7 +565,7 @@ TEST_CASE("limits: working memory, including a tetrahedralization quadratic in i
   DecodeOptions roomy;
   roomy.limits.max_memory = 64u << 20;
   auto r2 = decode(b.data(), b.size(), roomy);
-  REQUIRE_MESSAGE(r2.ok(), r2.error().to_string());
+  REQUIRE_MESSAGE(r2.ok(), hmc::testgen::why(r2));
   CHECK(r2.value().finest().triangles == d.value().finest().triangles);
   // A limit below the points' own share refuses the level before decoding it.
   DecodeOptions tiny;

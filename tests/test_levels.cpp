@@ -11,6 +11,7 @@
 #include "delaunay/delaunay.hpp"
 #include "hmc/codec.hpp"
 #include "samples.hpp"
+#include "support/why.hpp"
 
 using namespace hmc;
 using namespace hmc::detail;
@@ -25,7 +26,7 @@ Encoded encode_levels(const Mesh& m, int levels, Optimizer o = Optimizer::best,
   opt.boundary_mode = b;
   opt.fidelity = f;
   auto e = encode(m, opt);
-  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  REQUIRE_MESSAGE(e.ok(), hmc::testgen::why(e));
   return std::move(e).value();
 }
 
@@ -94,7 +95,7 @@ TEST_CASE("decoded levels equal the encoder's, coarsest first, each a subset of 
   const auto e = encode_levels(samples::torus(40, 16), 4);
   REQUIRE(e.levels.size() == 4);
   auto d = decode(e.bytes.data(), e.bytes.size());
-  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
   REQUIRE(d.value().levels.size() == 4);
   for (std::size_t i = 0; i < 4; ++i) {
     CAPTURE(i);
@@ -118,7 +119,7 @@ TEST_CASE("every prefix ending on a level boundary decodes to that level; cuts e
   for (std::size_t i = 0; i < e.levels.size(); ++i) {
     const auto& lvl = e.levels[i];
     auto d = decode(b.data(), lvl.stream_bytes);
-    REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+    REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
     CHECK(d.value().finest().lod == lvl.lod);
     CHECK(d.value().finest().points == lvl.points);
     CHECK(d.value().finest().triangles == lvl.triangles);
@@ -189,7 +190,7 @@ TEST_CASE("rebuilding only the finest decoded level gives it the same mesh and s
     for (std::size_t i = 0; i < e.levels.size(); ++i) {
       CAPTURE(i);
       auto d = decode(e.bytes.data(), e.levels[i].stream_bytes, finest);
-      REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+      REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
       const auto& got = d.value().levels;
       REQUIRE(got.size() == i + 1);
       for (std::size_t j = 0; j <= i; ++j) {
@@ -290,8 +291,8 @@ TEST_CASE("fast_decode: plain octrees without neighbours, the same levels, a lar
   auto small = encode(m, opt);
   opt.fast_decode = true;
   auto fast = encode(m, opt);
-  REQUIRE_MESSAGE(small.ok(), small.error().to_string());
-  REQUIRE_MESSAGE(fast.ok(), fast.error().to_string());
+  REQUIRE_MESSAGE(small.ok(), hmc::testgen::why(small));
+  REQUIRE_MESSAGE(fast.ok(), hmc::testgen::why(fast));
   const auto& e = fast.value();
   REQUIRE(e.levels.size() == small.value().levels.size());
   for (std::size_t i = 0; i < e.levels.size(); ++i) {
@@ -314,7 +315,7 @@ TEST_CASE("fast_decode: plain octrees without neighbours, the same levels, a lar
   }
   CHECK(layers == 3);
   auto d = decode(e.bytes.data(), e.bytes.size());
-  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
   CHECK(d.value().finest().points == e.points);
   CHECK(d.value().finest().triangles == small.value().levels.back().triangles);
 }

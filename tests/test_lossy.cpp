@@ -22,6 +22,7 @@
 #include "quant/scalar_quantizer.hpp"
 #include "reconstruct/distance.hpp"
 #include "samples.hpp"
+#include "support/why.hpp"
 
 using namespace hmc;
 using namespace hmc::detail;
@@ -53,13 +54,13 @@ double gdist2(const GridPoint& a, const GridPoint& b) {
 
 Encoded encode_ok(const Mesh& m, const EncodeOptions& opt) {
   auto e = encode(m, opt);
-  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  REQUIRE_MESSAGE(e.ok(), hmc::testgen::why(e));
   return std::move(e).value();
 }
 
 Decoded decode_ok(const std::vector<std::uint8_t>& bytes) {
   auto d = decode(bytes.data(), bytes.size());
-  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
   return std::move(d).value();
 }
 

@@ -19,6 +19,7 @@
 #include "hmc/meshio.hpp"
 #include "samples.hpp"
 #include "support/temp_dir.hpp"
+#include "support/why.hpp"
 
 using hmc::Mesh;
 using hmc::Status;
@@ -191,7 +192,7 @@ TEST_CASE("meshio: surface round trips are exact") {
     hmc::io::WriteOptions opt;
     opt.binary = c.binary;
     auto w = hmc::io::write_mesh(path, m, Format::automatic, opt);
-    REQUIRE_MESSAGE(w.ok(), w.error().to_string());
+    REQUIRE_MESSAGE(w.ok(), hmc::testgen::why(w));
     const Mesh back = must_read(path);
     check_same(m, back, c.connectivity);
     if (!c.connectivity) CHECK(back.triangles.empty());
@@ -215,7 +216,7 @@ TEST_CASE("meshio: tetrahedral round trips are exact") {
     hmc::io::WriteOptions opt;
     opt.binary = c.binary;
     auto w = hmc::io::write_mesh(path, m, Format::automatic, opt);
-    REQUIRE_MESSAGE(w.ok(), w.error().to_string());
+    REQUIRE_MESSAGE(w.ok(), hmc::testgen::why(w));
     check_same(m, must_read(path));
   }
   // TetGen: reading through the .ele name finds the same files.

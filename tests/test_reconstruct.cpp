@@ -22,6 +22,7 @@
 #include "reconstruct/tuning.hpp"
 #include "reconstruct/winding.hpp"
 #include "samples.hpp"
+#include "support/why.hpp"
 #include "util/bytes.hpp"
 #include "util/u256.hpp"
 
@@ -35,9 +36,9 @@ Decoded roundtrip(const Mesh& m, Fidelity f, Encoded* enc_out = nullptr, int bit
   o.bits = bits;
   o.fidelity = f;
   auto e = encode(m, o);
-  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  REQUIRE_MESSAGE(e.ok(), hmc::testgen::why(e));
   auto d = decode(e.value().bytes.data(), e.value().bytes.size());
-  REQUIRE_MESSAGE(d.ok(), d.error().to_string());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
   // The encoder predicts exactly what the decoder rebuilds.
   CHECK(d.value().finest().triangles == e.value().triangles);
   CHECK(d.value().finest().tetrahedra == e.value().tetrahedra);

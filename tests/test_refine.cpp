@@ -21,6 +21,7 @@
 #include "pointset/plane_rank.hpp"
 #include "pointset/refine.hpp"
 #include "samples.hpp"
+#include "support/why.hpp"
 #include "util/kdtree.hpp"
 #include "util/morton.hpp"
 #include "util/radix_sort.hpp"
@@ -47,7 +48,7 @@ Points quantize(const Mesh& m, int q) {
   o.kind = Kind::points;
   o.write_info = false;
   auto e = encode(m, o);
-  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  REQUIRE_MESSAGE(e.ok(), hmc::testgen::why(e));
   return e.value().points;
 }
 

@@ -20,6 +20,7 @@
 #include "hmc/codec.hpp"
 #include "hmc/hmc.hpp"
 #include "samples.hpp"
+#include "support/why.hpp"
 
 using namespace hmc;
 using hmc::detail::StreamDecoder;
@@ -40,7 +41,7 @@ Bytes encode_sample(const Mesh& m, int levels, std::optional<Kind> kind = std::n
   o.bits = bits;
   o.boundary_mode = BoundaryMode::linear;
   auto e = encode(m, o);
-  REQUIRE_MESSAGE(e.ok(), e.error().to_string());
+  REQUIRE_MESSAGE(e.ok(), hmc::testgen::why(e));
   return std::move(e).value().bytes;
 }
 
@@ -564,7 +565,7 @@ TEST_CASE("the C API's streaming decoder (through hmc.hpp) matches whole-buffer 
     while (pos < b.size()) {
       const std::size_t n = std::min(b.size() - pos, pieces());
       auto r = d.feed(b.data() + pos, n);
-      REQUIRE_MESSAGE(r.ok(), r.error().to_string());
+      REQUIRE_MESSAGE(r.ok(), hmc::testgen::why(r));
       pos += n;
       for (; seen < r.value(); ++seen) {
         const DecodedLevel& want = ref.decoded.levels[seen];
