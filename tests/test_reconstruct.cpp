@@ -1597,6 +1597,41 @@ TEST_CASE("truth labels: the winding numbers the walk counts, for a closed and a
   CHECK(off_grid.tree.get() != nullptr);
 }
 
+TEST_CASE("surface topology: components and Euler characteristic, with dense and with wide vertex indices") {
+  // A torus: an m x m grid of quads on the unit square with opposite sides
+  // glued, two triangles per quad (V = m², E = 3m², F = 2m²: χ = 0).
+  auto torus = [](std::uint32_t m, std::uint32_t offset) {
+    std::vector<Triangle> f;
+    auto v = [&](std::uint32_t i, std::uint32_t j) { return offset + (i % m) * m + (j % m); };
+    for (std::uint32_t i = 0; i < m; ++i)
+      for (std::uint32_t j = 0; j < m; ++j) {
+        f.push_back({v(i, j), v(i + 1, j), v(i + 1, j + 1)});
+        f.push_back({v(i, j), v(i + 1, j + 1), v(i, j + 1)});
+      }
+    return f;
+  };
+  const std::vector<Triangle> tetra{{0, 1, 2}, {0, 3, 1}, {1, 3, 2}, {2, 3, 0}};  // a sphere: χ = 2
+  CHECK(detail::surface_topology({}) == std::pair<std::size_t, long>{0, 0});
+  CHECK(detail::surface_topology(tetra) == std::pair<std::size_t, long>{1, 2});
+  CHECK(detail::surface_topology(torus(7, 0)) == std::pair<std::size_t, long>{1, 0});
+  // A disk (the tetrahedron less a face, χ = 1) beside the torus, and two
+  // faces that share only a vertex (two components, χ = 5 − 6 + 2 = 1).
+  auto both = torus(5, 4);
+  both.insert(both.end(), tetra.begin(), tetra.end() - 1);
+  CHECK(detail::surface_topology(both) == std::pair<std::size_t, long>{2, 1});
+  CHECK(detail::surface_topology({{0, 1, 2}, {2, 3, 4}}) == std::pair<std::size_t, long>{2, 1});
+  // Vertex indices near 2^32 leave no room for the face index beside an
+  // edge's two in 64 bits, and are sparse: the other path, same answers.
+  const std::uint32_t far = 0xFFFFF000u;
+  CHECK(detail::surface_topology(torus(7, far)) == std::pair<std::size_t, long>{1, 0});
+  auto far_both = torus(5, far);
+  for (const auto& t : both) {
+    if (&t - both.data() < 50) continue;  // the torus's 50 faces, shifted above
+    far_both.push_back({far - 10 + t[0], far - 10 + t[1], far - 10 + t[2]});
+  }
+  CHECK(detail::surface_topology(far_both) == std::pair<std::size_t, long>{2, 1});
+}
+
 TEST_CASE("boundary faces of tetrahedra: the faces only one of them has, facing out") {
   // Two tetrahedra sharing the face (1, 2, 3), one of them negatively
   // oriented: six boundary faces, each counter-clockwise seen from outside.

@@ -482,34 +482,77 @@ std::uint64_t approximation_penalty(const Tetrahedralization& dt, const std::vec
 }  // namespace
 
 // Components (of faces joined by edges) and Euler characteristic of a
-// triangle list.
+// triangle list. The edges are sorted as one 64-bit key each (the edge's
+// vertices and the face's index) by radix sort where their bits fit, which
+// takes a third of the time of sorting pairs (the horse's interface: 97k
+// faces; the tuning of every level counts it a few times).
 std::pair<std::size_t, long> surface_topology(const std::vector<Triangle>& faces) {
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
-  std::vector<std::uint32_t> verts;
-  for (std::uint32_t i = 0; i < faces.size(); ++i)
-    for (int a = 0; a < 3; ++a) {
-      const std::uint64_t x = faces[i][a], y = faces[i][(a + 1) % 3];
-      edges.push_back({(std::min(x, y) << 32) | std::max(x, y), i});
-      verts.push_back(faces[i][a]);
-    }
-  std::sort(edges.begin(), edges.end());
-  std::sort(verts.begin(), verts.end());
-  const auto nv = static_cast<long>(std::unique(verts.begin(), verts.end()) - verts.begin());
+  std::uint32_t top = 0;
+  for (const auto& f : faces) top = std::max({top, f[0], f[1], f[2]});
+  long nv = 0;
+  if (std::uint64_t{top} < 8 * std::uint64_t{faces.size()}) {  // a flag per vertex index
+    std::vector<std::uint8_t> used(faces.empty() ? 0 : std::size_t{top} + 1, 0);
+    for (const auto& f : faces)
+      for (std::uint32_t v : f)
+        if (!used[v]) used[v] = 1, ++nv;
+  } else {  // sparse indices
+    std::vector<std::uint32_t> verts;
+    verts.reserve(3 * faces.size());
+    for (const auto& f : faces) verts.insert(verts.end(), f.begin(), f.end());
+    std::sort(verts.begin(), verts.end());
+    nv = static_cast<long>(std::unique(verts.begin(), verts.end()) - verts.begin());
+  }
   std::vector<std::uint32_t> parent(faces.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   auto find = [&](std::uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
+  auto bits_of = [](std::uint64_t x) {
+    int b = 0;
+    while (x >> b) ++b;
+    return b;
+  };
+  const int vb = bits_of(top), fb = bits_of(faces.size());
   long ne = 0;
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) {
-      parent[find(edges[j].second)] = find(edges[i].second);
-      ++j;
+  // Joins the faces of each run of equal edges (same(i, j): entries i and j
+  // are one edge; face(i): entry i's face), counting the edges.
+  auto join = [&](std::size_t count, auto same, auto face) {
+    for (std::size_t i = 0; i < count;) {
+      std::size_t j = i;
+      while (j < count && same(i, j)) {
+        parent[find(face(j))] = find(face(i));
+        ++j;
+      }
+      ++ne;
+      i = j;
     }
-    ++ne;
-    i = j;
+  };
+  if (2 * vb + fb <= 64) {
+    std::vector<std::uint64_t> keys;
+    keys.reserve(3 * faces.size());
+    for (std::uint32_t i = 0; i < faces.size(); ++i)
+      for (int a = 0; a < 3; ++a) {
+        const std::uint64_t x = faces[i][a], y = faces[i][(a + 1) % 3];
+        keys.push_back(((std::min(x, y) << vb | std::max(x, y)) << fb) | i);
+      }
+    radix_sort(keys, 2 * vb + fb);
+    const std::uint64_t face_mask = fb == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << fb) - 1;
+    join(
+        keys.size(), [&](std::size_t i, std::size_t j) { return (keys[i] >> fb) == (keys[j] >> fb); },
+        [&](std::size_t i) { return static_cast<std::uint32_t>(keys[i] & face_mask); });
+  } else {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;
+    edges.reserve(3 * faces.size());
+    for (std::uint32_t i = 0; i < faces.size(); ++i)
+      for (int a = 0; a < 3; ++a) {
+        const std::uint64_t x = faces[i][a], y = faces[i][(a + 1) % 3];
+        edges.push_back({(std::min(x, y) << 32) | std::max(x, y), i});
+      }
+    std::sort(edges.begin(), edges.end());
+    join(
+        edges.size(), [&](std::size_t i, std::size_t j) { return edges[i].first == edges[j].first; },
+        [&](std::size_t i) { return edges[i].second; });
   }
   std::size_t comps = 0;
   for (std::uint32_t i = 0; i < parent.size(); ++i) comps += find(i) == i;
