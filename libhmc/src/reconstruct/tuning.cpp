@@ -483,9 +483,9 @@ std::uint64_t approximation_penalty(const Tetrahedralization& dt, const std::vec
 
 // Components (of faces joined by edges) and Euler characteristic of a
 // triangle list. The edges are sorted as one 64-bit key each (the edge's
-// vertices and the face's index) by radix sort where their bits fit, which
-// takes a third of the time of sorting pairs (the horse's interface: 97k
-// faces; the tuning of every level counts it a few times).
+// vertices and the face's index) by radix sort where their bits fit, not as
+// pairs by comparison (the horse's interface has 97k faces, and the tuning
+// of every level counts it a few times: its 4-level encode takes 4 % less).
 std::pair<std::size_t, long> surface_topology(const std::vector<Triangle>& faces) {
   std::uint32_t top = 0;
   for (const auto& f : faces) top = std::max({top, f[0], f[1], f[2]});
