@@ -699,6 +699,59 @@ TEST_CASE("the edge test's lengths, computed once, give the same flags; beyond 3
   CHECK_THROWS(candidate_flags(a, dt, local_scale(a, dt, 6), p, nullptr, nullptr, &wrong));
 }
 
+TEST_CASE("the peeling's decisions, kept across calls, give the same labels; the memo is read") {
+  // A sphere's and a torus's points (peeling thins their flat shells) and a
+  // random cloud; alpha tables with one and two classes, filters off and on.
+  std::vector<std::vector<GridPoint>> sets;
+  for (const Mesh& m : {samples::uv_sphere(14, 28), samples::torus(24, 12)}) sets.push_back(encode(m).value().points);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::uint32_t> c(0, 4000);
+  std::set<GridPoint> cloud;
+  while (cloud.size() < 600) cloud.insert({c(rng), c(rng), c(rng)});
+  sets.emplace_back(cloud.begin(), cloud.end());
+  int peeled = 0, compared = 0;
+  for (const auto& pts : sets) {
+    const auto dt = delaunay(pts);
+    const auto scale = local_scale(pts, dt, 6);
+    PeelMemo memo(dt.tets.size());
+    for (int pass = 0; pass < 2; ++pass)  // the second pass reads only what the first stored
+      for (std::uint32_t m : {384u, 1024u, 4096u})
+        for (bool two_classes : {false, true}) {
+          CAPTURE(m);
+          CAPTURE(two_classes);
+          ReconParams p;
+          p.peel = true;
+          p.multipliers = {m};
+          if (two_classes) {
+            p.multipliers = {m / 2, m * 2};
+            p.vertex_class.assign(pts.size(), 0);
+            for (std::size_t v = 0; v < pts.size(); v += 4) p.vertex_class[v] = 1;
+            p.filters[kCircleRadius] = 512;
+          }
+          const auto plain = rule_labels(pts, dt, scale, p);
+          CHECK(rule_labels(pts, dt, scale, p, nullptr, nullptr, nullptr, nullptr, &memo) == plain);
+          ReconParams flat = p;
+          flat.peel = false;
+          peeled += rule_labels(pts, dt, scale, flat) != plain;
+          ++compared;
+        }
+    // Every case known and "peel": the labels follow the memo, not the
+    // geometry (more tetrahedra peeled than the rule peels).
+    for (auto& b : memo.cases) b.store(0x7f);
+    ReconParams p;
+    p.multipliers = {1024};
+    const auto plain = rule_labels(pts, dt, scale, p);
+    const auto forced = rule_labels(pts, dt, scale, p, nullptr, nullptr, nullptr, nullptr, &memo);
+    CHECK(std::count(forced.begin(), forced.end(), std::uint8_t{1}) <
+          std::count(plain.begin(), plain.end(), std::uint8_t{1}));
+    // A memo of other tetrahedra is an internal error, not wrong labels.
+    PeelMemo other(dt.tets.size() + 1);
+    CHECK_THROWS(rule_labels(pts, dt, scale, p, nullptr, nullptr, nullptr, nullptr, &other));
+  }
+  CHECK(compared == 3 * 2 * 3 * 2);
+  CHECK(peeled > compared / 2);  // peeling does change labels here
+}
+
 TEST_CASE("filters only remove candidate faces, and their RCON syntax is checked") {
   const Mesh m = samples::uv_sphere(14, 28);
   const auto e = encode(m).value();

@@ -851,11 +851,42 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
   return cand;
 }
 
+namespace {
+
+// The pair of a tetrahedron's faces that are exposed, by the mask of its
+// exposed faces (bit k: face k): 0..5 for (0,1), (0,2), (0,3), (1,2), (1,3),
+// (2,3); -1 unless exactly two are. PeelMemo's bit of each case, and its
+// bit for a byte that holds the six.
+constexpr std::array<int, 16> kExposedPair = {-1, -1, -1, 0, -1, 1, 3, -1, -1, 2, 4, -1, 5, -1, -1, -1};
+constexpr std::uint8_t kPeelKnown = 0x40;
+
+// Whether peeling (spec 11.4) turns tetrahedron t outside when exactly the
+// two faces of `out` (mask, bit k: face k) are exposed: the larger
+// circumradius of its two inner faces is smaller than that of its two
+// exposed ones.
+bool peel_case(const std::vector<GridPoint>& points, const std::array<std::uint32_t, 4>& t, unsigned out) {
+  FaceRadius ro[2], ri[2];
+  int no = 0, ni = 0;
+  for (int k = 0; k < 4; ++k) {
+    const std::array<std::uint32_t, 3> f{t[kFaceVertices[k][0]], t[kFaceVertices[k][1]], t[kFaceVertices[k][2]]};
+    if (out & (1u << k)) ro[no++] = face_radius(points, f);
+    else ri[ni++] = face_radius(points, f);
+  }
+  // The larger of each pair (the first on a tie, which has the same
+  // radius), then strictly smaller inside.
+  const FaceRadius& max_in = radius_below(ri[0], ri[1]) ? ri[1] : ri[0];
+  const FaceRadius& max_out = radius_below(ro[0], ro[1]) ? ro[1] : ro[0];
+  return radius_below(max_in, max_out);
+}
+
+}  // namespace
+
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
                                       std::vector<std::uint8_t>* cand_out, HelperBudget* helpers,
-                                      FilterMemo* memo, const TetEdgeLengths* edges) {
+                                      FilterMemo* memo, const TetEdgeLengths* edges, PeelMemo* peel_memo) {
   const std::size_t nt = dt.tets.size();
+  if (peel_memo && peel_memo->cases.size() != nt) fail(Status::internal_error, "rule_labels: peel memo of other tetrahedra");
   std::vector<std::uint8_t> inside(nt, 1);
   std::vector<std::uint8_t> own;
   std::vector<std::uint8_t>& cand = cand_out ? *cand_out : own;
@@ -891,24 +922,21 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   };
   auto should_peel = [&](std::size_t t) {
     if (!inside[t]) return false;
-    std::array<std::uint32_t, 3> out[2], in[2];
-    int no = 0, ni = 0;
-    for (int k = 0; k < 4; ++k) {
-      if (exposed(t, k)) {
-        if (no == 2) return false;
-        out[no++] = face_of(dt, t, k);
-      } else {
-        if (ni == 2) return false;
-        in[ni++] = face_of(dt, t, k);
-      }
+    unsigned out = 0;  // bit k: face k exposed
+    for (int k = 0; k < 4; ++k)
+      if (exposed(t, k)) out |= 1u << k;
+    const int pair = kExposedPair[out];
+    if (pair < 0) return false;
+    if (!peel_memo) return peel_case(points, dt.tets[t], out);
+    auto& known = peel_memo->cases[t];
+    std::uint8_t c = known.load(std::memory_order_relaxed);
+    if (!(c & kPeelKnown)) {
+      c = kPeelKnown;
+      for (unsigned m = 0; m < 16; ++m)
+        if (kExposedPair[m] >= 0 && peel_case(points, dt.tets[t], m)) c |= static_cast<std::uint8_t>(1u << kExposedPair[m]);
+      known.store(c, std::memory_order_relaxed);
     }
-    // Each face's radius once; the larger of each pair (the first on a tie,
-    // which has the same radius), then strictly smaller inside.
-    const FaceRadius ri[2] = {face_radius(points, in[0]), face_radius(points, in[1])};
-    const FaceRadius ro[2] = {face_radius(points, out[0]), face_radius(points, out[1])};
-    const FaceRadius& max_in = radius_below(ri[0], ri[1]) ? ri[1] : ri[0];
-    const FaceRadius& max_out = radius_below(ro[0], ro[1]) ? ro[1] : ro[0];
-    return radius_below(max_in, max_out);
+    return ((c >> pair) & 1u) != 0;
   };
   std::vector<std::uint32_t> frontier, next, flips;
   std::vector<std::uint8_t> queued(nt, 0);

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -136,6 +137,19 @@ struct TetEdgeLengths {
   TetEdgeLengths(const std::vector<GridPoint>& points, const Tetrahedralization& dt, HelperBudget* helpers = nullptr);
 };
 
+/// The peeling's decision (spec 11.4) for every tetrahedron and pair of
+/// its faces that may be the exposed two: it depends on the four faces'
+/// circumradii only, not on the parameters, so an encoder trying many
+/// parameters with peeling on one level passes one PeelMemo to each call,
+/// which decides each tetrahedron's six cases the first time it is needed
+/// (byte per tetrahedron: bit 6 set when known, bit i the case of pair i).
+/// Calls on several threads may share one: every call stores the same
+/// value.
+struct PeelMemo {
+  explicit PeelMemo(std::size_t tets) : cases(tets) {}
+  std::vector<std::atomic<std::uint8_t>> cases;
+};
+
 /// Candidate flag of every face slot, indexed 4·tetrahedron + local face:
 /// the edge test against the alpha limits (spec 11.2) and the filters
 /// (11.2a). Both slots of a face carry the same flag. `memo`: FilterMemo;
@@ -147,11 +161,13 @@ std::vector<std::uint8_t> candidate_flags(const std::vector<GridPoint>& points, 
 
 /// The labels of the rule before toggles (flood from the hull through
 /// non-candidate faces, then peeling); `cand`, when given, receives the
-/// candidate flags (candidate_flags(), with `memo` and `edges`).
+/// candidate flags (candidate_flags(), with `memo` and `edges`); `peel_memo`:
+/// PeelMemo of these points and tetrahedra (the same labels).
 std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const std::vector<std::uint64_t>& scale, const ReconParams& p,
                                       std::vector<std::uint8_t>* cand = nullptr, HelperBudget* helpers = nullptr,
-                                      FilterMemo* memo = nullptr, const TetEdgeLengths* edges = nullptr);
+                                      FilterMemo* memo = nullptr, const TetEdgeLengths* edges = nullptr,
+                                      PeelMemo* peel_memo = nullptr);
 
 /// The normative repair step (spec 11.4a) on rule labels: greedy local
 /// flips around unsound vertices (surface kind: points off the surface;

@@ -764,6 +764,8 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   const std::vector<std::uint8_t> want_all(n, kind == Kind::surface ? 1 : 0);
   // The edge test's lengths, shared by every trial below (and their helper).
   const TetEdgeLengths edges(points, dt, in.helpers);
+  // The peeling's decisions, shared the same way (filled as trials need them).
+  PeelMemo peels(nt);
   // What parameters p leave to correct: the rule's labels that differ from
   // the truth or, on a coarser level that relies on the decoder's repair,
   // what the repair cannot mend.
@@ -785,7 +787,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   auto cost = [&](const ReconParams& p, const std::vector<std::uint64_t>& scale, std::vector<std::uint8_t>& labels,
                   FilterMemo* memo = nullptr) {
     std::vector<std::uint8_t> cand;
-    labels = rule_labels(points, dt, scale, p, &cand, nullptr, memo, &edges);
+    labels = rule_labels(points, dt, scale, p, &cand, nullptr, memo, &edges, &peels);
     if (p.repair) {
       repair_labels(dt, kind, labels);
       const std::uint64_t m = approximation_penalty(dt, labels, want_all, in);
