@@ -892,23 +892,29 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
   std::vector<std::uint8_t>& cand = cand_out ? *cand_out : own;
   cand = candidate_flags(points, dt, scale, p, helpers, memo, edges);
 
-  // Flood from outside the hull through non-candidate faces.
-  std::vector<std::uint32_t> stack;
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 4; ++k)
-      if (dt.neighbors[t][k] == kNoTet && !cand[t * 4 + static_cast<std::size_t>(k)] && inside[t]) {
-        inside[t] = 0;
-        stack.push_back(static_cast<std::uint32_t>(t));
+  // Flood from outside the hull through non-candidate faces: the
+  // tetrahedra joined to the outside (index nt) by such faces, found with a
+  // union-find over the faces in tetrahedron order.
+  {
+    std::vector<std::uint32_t> parent(nt + 1);
+    for (std::size_t t = 0; t <= nt; ++t) parent[t] = static_cast<std::uint32_t>(t);
+    auto find = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k) {
+        if (cand[t * 4 + static_cast<std::size_t>(k)]) continue;
+        std::uint32_t u = dt.neighbors[t][k];
+        if (u == kNoTet) u = static_cast<std::uint32_t>(nt);
+        else if (u > t) continue;  // joined from u's side
+        std::uint32_t a = find(static_cast<std::uint32_t>(t)), b = find(u);
+        if (a == b) continue;
+        if (a < b) std::swap(a, b);
+        parent[a] = b;
       }
-  while (!stack.empty()) {
-    const std::uint32_t t = stack.back();
-    stack.pop_back();
-    for (int k = 0; k < 4; ++k) {
-      const std::uint32_t u = dt.neighbors[t][k];
-      if (u == kNoTet || !inside[u] || cand[std::size_t{t} * 4 + static_cast<std::size_t>(k)]) continue;
-      inside[u] = 0;
-      stack.push_back(u);
-    }
+    const std::uint32_t out = find(static_cast<std::uint32_t>(nt));
+    for (std::size_t t = 0; t < nt; ++t) inside[t] = find(static_cast<std::uint32_t>(t)) != out;
   }
   if (!p.peel) return inside;
 
