@@ -165,6 +165,12 @@ std::vector<std::uint8_t> interface_defects(const Tetrahedralization& dt, const 
   std::vector<std::uint8_t> bad(n, 0);
   const auto have = interface_vertices(dt, inside, n);
   for (std::size_t v = 0; v < n; ++v) bad[v] = want[v] && !have[v];
+  // Each interface edge as one key (its vertices, vb bits each), radix
+  // sorted: faster than a comparison sort of the horse's 290k edge uses,
+  // which tuning sorts on every trial of a coarser level.
+  int vb = 1;
+  while (vb < 32 && (std::uint64_t{1} << vb) < n) ++vb;
+  const std::uint64_t low = (std::uint64_t{1} << vb) - 1;
   std::vector<std::uint64_t> edges;
   for (std::size_t t = 0; t < dt.tets.size(); ++t) {
     if (!inside[t]) continue;
@@ -173,15 +179,15 @@ std::vector<std::uint8_t> interface_defects(const Tetrahedralization& dt, const 
       if (u != kNoTet && inside[u]) continue;
       for (int i = 0; i < 3; ++i) {
         const std::uint64_t a = dt.tets[t][kFaceVertices[k][i]], b = dt.tets[t][kFaceVertices[k][(i + 1) % 3]];
-        edges.push_back((std::min(a, b) << 32) | std::max(a, b));
+        edges.push_back((std::min(a, b) << vb) | std::max(a, b));
       }
     }
   }
-  std::sort(edges.begin(), edges.end());
+  radix_sort(edges, 2 * vb);
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;
     while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i != 2) bad[edges[i] >> 32] = bad[edges[i] & 0xffffffffu] = 1;
+    if (j - i != 2) bad[edges[i] >> vb] = bad[edges[i] & low] = 1;
     i = j;
   }
   return bad;
