@@ -84,7 +84,8 @@ WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<
   for (std::uint32_t i = 0; i < order_.size(); ++i) order_[i] = i;
   nodes_.reserve(2 * tri_.size() / kLeafSize + 2);
   nodes_.push_back({});  // index 0 is never a child, so left == 0 marks a leaf
-  if (!tri_.empty()) build(0, static_cast<std::uint32_t>(tri_.size()));
+  Moments root;
+  if (!tri_.empty()) build(0, static_cast<std::uint32_t>(tri_.size()), root);
   // The triangles in tree order, so that a leaf's lie side by side.
   std::vector<Triangle> in_order(tri_.size());
   for (std::size_t i = 0; i < order_.size(); ++i) in_order[i] = tri_[order_[i]];
@@ -92,7 +93,7 @@ WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<
   std::vector<std::uint32_t>().swap(order_);
 }
 
-std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
+std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end, Moments& mo) {
   const auto id = static_cast<std::uint32_t>(nodes_.size());
   nodes_.push_back({});
   Node n;
@@ -112,35 +113,75 @@ std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
     total += w;
   }
   for (int a = 0; a < 3; ++a) n.centre[a] = total > 0 ? n.centre[a] / total : 0.5 * (lo[a] + hi[a]);
+  double r2 = 0;  // the radius, squared until the end (the same largest root)
+  for (std::uint32_t i = begin; i < end; ++i)
+    for (const auto& v : corners(order_[i])) {
+      const Vec3 d = sub(v, n.centre);
+      r2 = std::max(r2, dot(d, d));
+    }
+  n.radius = std::sqrt(r2);
   // Triangle t, area vector a_t, contributes a_t · g(x) integrated over its
   // area (per unit area), g(x) = (x - q) / |x - q|^3. Around the centre p,
   // with e = x - p: g(x) = g(p) + J e + (1/2) H[e, e] + ..., so the cluster
   // needs M = sum a_t ⊗ E[e] (first order) and T = sum a_t ⊗ E[e ⊗ e]
   // (second order), E the mean over the triangle: E[e] = c - p and
   // E[e ⊗ e] = (c - p) ⊗ (c - p) + (1/12) sum over the vertices v of
-  // (v - c) ⊗ (v - c), c the centroid.
-  double m[3][3] = {}, t3[3][3][3] = {};
-  for (std::uint32_t i = begin; i < end; ++i) {
-    const auto t = corners(order_[i]);
-    for (const auto& v : t) n.radius = std::max(n.radius, norm(sub(v, n.centre)));
-    const Vec3 av = cross(sub(t[1], t[0]), sub(t[2], t[0]));
-    Vec3 c, e;
-    for (int a = 0; a < 3; ++a) c[a] = (t[0][a] + t[1][a] + t[2][a]) / 3, e[a] = c[a] - n.centre[a];
-    double s2[3][3];
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) {
-        double own = 0;
-        for (const auto& v : t) own += (v[j] - c[j]) * (v[k] - c[k]);
-        s2[j][k] = e[j] * e[k] + own / 12;
-      }
-    for (int a = 0; a < 3; ++a) {
-      const double half = 0.5 * av[a];
-      for (int j = 0; j < 3; ++j) {
-        m[a][j] += half * e[j];
-        for (int k = 0; k < 3; ++k) t3[a][j][k] += half * s2[j][k];
+  // (v - c) ⊗ (v - c), c the centroid. A leaf sums them over its
+  // triangles; a parent moves its children's to its own centre (with
+  // δ = p_child - p: M += A ⊗ δ, T_ajk += M_aj δ_k + M_ak δ_j + A_a δ_j δ_k,
+  // A the child's area vector), each triangle once instead of once per
+  // level of the tree.
+  if (end - begin > kLeafSize) {
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+    const std::uint32_t mid = begin + (end - begin) / 2;
+    auto key = [&](std::uint32_t i) {
+      const auto& t = tri_[i];
+      return points_[t[0]][axis] + points_[t[1]][axis] + points_[t[2]][axis];
+    };
+    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                     [&](std::uint32_t x, std::uint32_t y) { return key(x) < key(y); });
+    Moments child[2];
+    n.left = build(begin, mid, child[0]);
+    n.right = build(mid, end, child[1]);
+    mo = Moments{};
+    for (int c = 0; c < 2; ++c) {
+      const Node& k = nodes_[c == 0 ? n.left : n.right];
+      const Vec3 d = sub(k.centre, n.centre);
+      const Moments& x = child[c];
+      for (int a = 0; a < 3; ++a)
+        for (int j = 0; j < 3; ++j) {
+          mo.m[a][j] += x.m[a][j] + k.area[a] * d[j];
+          for (int l = 0; l < 3; ++l)
+            mo.t[a][j][l] += x.t[a][j][l] + x.m[a][j] * d[l] + x.m[a][l] * d[j] + k.area[a] * d[j] * d[l];
+        }
+    }
+  } else {
+    mo = Moments{};
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const auto t = corners(order_[i]);
+      const Vec3 av = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+      Vec3 c, e;
+      for (int a = 0; a < 3; ++a) c[a] = (t[0][a] + t[1][a] + t[2][a]) / 3, e[a] = c[a] - n.centre[a];
+      double s2[3][3];
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k) {
+          double own = 0;
+          for (const auto& v : t) own += (v[j] - c[j]) * (v[k] - c[k]);
+          s2[j][k] = e[j] * e[k] + own / 12;
+        }
+      for (int a = 0; a < 3; ++a) {
+        const double half = 0.5 * av[a];
+        for (int j = 0; j < 3; ++j) {
+          mo.m[a][j] += half * e[j];
+          for (int k = 0; k < 3; ++k) mo.t[a][j][k] += half * s2[j][k];
+        }
       }
     }
   }
+  const auto& m = mo.m;
+  const auto& t3 = mo.t;
   // With r = p - q: J = I / r^3 - 3 r r^T / r^5 and H_ijk = -3 (δ_ij r_k +
   // δ_ik r_j + δ_jk r_i) / r^5 + 15 r_i r_j r_k / r^7, contracted with M and
   // T (which is symmetric in its last two indices) in query().
@@ -160,20 +201,6 @@ std::uint32_t WindingNumber::build(std::uint32_t begin, std::uint32_t end) {
   };
   n.cubic2 = {sym(0, 0, 0), sym(1, 1, 1), sym(2, 2, 2), sym(0, 0, 1), sym(0, 0, 2),
               sym(1, 1, 0), sym(1, 1, 2), sym(2, 2, 0), sym(2, 2, 1), sym(0, 1, 2)};
-  if (end - begin > kLeafSize) {
-    int axis = 0;
-    for (int a = 1; a < 3; ++a)
-      if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
-    const std::uint32_t mid = begin + (end - begin) / 2;
-    auto key = [&](std::uint32_t i) {
-      const auto& t = tri_[i];
-      return points_[t[0]][axis] + points_[t[1]][axis] + points_[t[2]][axis];
-    };
-    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                     [&](std::uint32_t x, std::uint32_t y) { return key(x) < key(y); });
-    n.left = build(begin, mid);
-    n.right = build(mid, end);
-  }
   nodes_[id] = n;
   return id;
 }

@@ -41,7 +41,13 @@ class WindingNumber {
     std::uint32_t begin = 0, end = 0;  // range in tri_ (leaf) ...
     std::uint32_t left = 0, right = 0; // ... or children (left != 0)
   };
-  std::uint32_t build(std::uint32_t begin, std::uint32_t end);
+  // A node's moments about its centre while the tree is built: M (first
+  // order) and T (second), from which Node's coefficients are folded.
+  struct Moments {
+    double m[3][3] = {};
+    double t[3][3][3] = {};
+  };
+  std::uint32_t build(std::uint32_t begin, std::uint32_t end, Moments& moments);
   double query(std::uint32_t node, const Vec3& q) const;
 
   std::array<Vec3, 3> corners(std::uint32_t i) const {
