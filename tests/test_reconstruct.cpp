@@ -913,6 +913,71 @@ void spec_repair_search(const Tetrahedralization& dt, std::vector<std::uint8_t>&
 
 }  // namespace
 
+TEST_CASE("the repair's first step turns exactly the small closed sets of one label") {
+  // Spec 11.4a: a face-connected set of at most four tetrahedra of one
+  // label, all of whose other neighbours have the other label, takes that
+  // label (an outside set only when it does not reach the hull). Written
+  // here from the definition, every set found in full; repair_labels() is
+  // that step, then the search.
+  int four = 0, five = 0;  // sets of four (turned) and five (kept) that would turn if small
+  auto reference = [&](const Tetrahedralization& dt, std::vector<std::uint8_t> inside) {
+    const std::size_t nt = dt.tets.size();
+    std::vector<std::uint32_t> set_of(nt, ~0u);
+    std::vector<std::vector<std::uint32_t>> sets;
+    std::vector<std::uint8_t> hull;
+    for (std::uint32_t s0 = 0; s0 < nt; ++s0) {
+      if (set_of[s0] != ~0u) continue;
+      const auto id = static_cast<std::uint32_t>(sets.size());
+      sets.push_back({s0});
+      hull.push_back(0);
+      set_of[s0] = id;
+      for (std::size_t i = 0; i < sets[id].size(); ++i)
+        for (std::uint32_t u : dt.neighbors[sets[id][i]]) {
+          if (u == kNoTet) {
+            hull[id] = 1;
+          } else if (inside[u] == inside[s0] && set_of[u] == ~0u) {
+            set_of[u] = id;
+            sets[id].push_back(u);
+          }
+        }
+    }
+    std::vector<std::uint8_t> out = inside;
+    for (std::size_t id = 0; id < sets.size(); ++id) {
+      if (!inside[sets[id][0]] && hull[id]) continue;
+      four += sets[id].size() == 4;
+      five += sets[id].size() == 5;
+      if (sets[id].size() <= 4)
+        for (auto t : sets[id]) out[t] ^= 1;
+    }
+    return out;
+  };
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<std::uint32_t> c(0, 2000);
+  std::set<GridPoint> s;
+  while (s.size() < 700) s.insert({c(rng), c(rng), c(rng)});
+  const std::vector<GridPoint> pts(s.begin(), s.end());
+  const auto dt = delaunay(pts);
+  int changed = 0;
+  for (double share : {0.05, 0.2, 0.5, 0.8, 0.95}) {
+    CAPTURE(share);
+    std::bernoulli_distribution in(share);
+    for (int trial = 0; trial < 4; ++trial) {
+      std::vector<std::uint8_t> labels(dt.tets.size());
+      for (auto& l : labels) l = in(rng);
+      const auto bubbles = reference(dt, labels);
+      auto want = bubbles;
+      repair_search(dt, want, std::vector<std::uint8_t>(pts.size(), 0));
+      auto got = labels;
+      repair_labels(dt, Kind::volume, got);
+      CHECK(got == want);
+      changed += bubbles != labels;
+    }
+  }
+  CHECK(changed == 20);  // every labelling had small sets
+  CHECK(four > 0);       // both sides of the limit were met
+  CHECK(five > 0);
+}
+
 TEST_CASE("the repair's search keeps every outcome of the spec's pseudo-code") {
   std::size_t flips = 0;
   auto compare = [&](const Tetrahedralization& dt, const std::vector<std::uint8_t>& labels,

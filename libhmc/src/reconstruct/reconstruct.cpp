@@ -981,6 +981,12 @@ constexpr std::size_t kBubble = 4;
 
 void remove_bubbles(const Tetrahedralization& dt, std::vector<std::uint8_t>& inside) {
   const std::size_t nt = dt.tets.size();
+  // seen: 0 not yet, 1 in a set of at most kBubble (or the one being
+  // grown), 2 in a larger one. A set is grown only until it has more than
+  // kBubble members, which are then marked 2; a later growth from another
+  // member of that set meets one of them and stops too. So each growth
+  // stays among a few nearby tetrahedra instead of crossing the whole
+  // outside or inside, and the sets found small are the same.
   std::vector<std::uint8_t> seen(nt, 0);
   std::vector<std::uint32_t> members;
   std::vector<std::uint32_t> flips;
@@ -989,20 +995,27 @@ void remove_bubbles(const Tetrahedralization& dt, std::vector<std::uint8_t>& ins
     const std::uint8_t label = inside[s0];
     members.assign(1, static_cast<std::uint32_t>(s0));
     seen[s0] = 1;
-    bool on_hull = false, small = true;
-    for (std::size_t i = 0; i < members.size(); ++i)
+    bool on_hull = false, large = false;
+    for (std::size_t i = 0; i < members.size() && !large; ++i)
       for (int k = 0; k < 4; ++k) {
         const std::uint32_t u = dt.neighbors[members[i]][k];
         if (u == kNoTet) {
           on_hull = true;
           continue;
         }
-        if (inside[u] != label || seen[u]) continue;
+        if (inside[u] != label) continue;
+        if (seen[u] == 2 || (seen[u] == 0 && members.size() == kBubble)) {
+          large = true;  // a member of a larger set, or one member too many
+          break;
+        }
+        if (seen[u]) continue;
         seen[u] = 1;
         members.push_back(u);
-        if (members.size() > kBubble) small = false;
       }
-    if (small && (label || !on_hull)) flips.insert(flips.end(), members.begin(), members.end());
+    if (large)
+      for (auto t : members) seen[t] = 2;
+    else if (label || !on_hull)
+      flips.insert(flips.end(), members.begin(), members.end());
   }
   for (auto t : flips) inside[t] ^= 1;
 }
