@@ -508,7 +508,7 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
     say(f"Date: {time.strftime('%Y-%m-%d %H:%M', time.localtime(started))}; "
         f"`{tools['version']}` from `{tools['hmc']}`, tree {tools['commit']}; "
         f"{tools['draco']}; Python {sys.version.split()[0]}.  ")
-    say(f"Machine: {os.cpu_count()} cores, shared with other jobs (load average {loads[0]:.1f} at the start, "
+    say(f"Machine: {tools['cpu']}, {os.cpu_count()} cores, shared with other jobs (load average {loads[0]:.1f} at the start, "
         f"{loads[1]:.1f} at the end), so every time is the **median** of up to {a.repeat} runs "
         f"({a.pairs} for the encode and the one-thread decode of the bars; fewer when the runs of one "
         f"measurement exceeded {a.budget:g} s; counts in section 4). "
@@ -859,6 +859,24 @@ def main():
     for t in ("draco_encoder", "draco_decoder"):
         if not shutil.which(t):
             fail(f"{t} not found (apt-get install draco)")
+    # The plots come last: find out now, not after minutes of measuring.
+    for module, package in (("numpy", "python3-numpy"), ("matplotlib", "python3-matplotlib")):
+        try:
+            __import__(module)
+        except ImportError:
+            fail(f"Python module {module} not found for {sys.executable} (Debian: apt-get install {package}, then run "
+                 "this with /usr/bin/python3)")
+    # The ratios depend on the machine (a session's new machine once made
+    # TetGen 30 % faster and HMC no faster): name its processor.
+    tools["cpu"] = "unknown processor"
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    tools["cpu"] = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
     tools["version"] = run([tools["hmc"], "version"])["out"].strip()
     tools["floor"] = statistics.median(run(["/bin/true"])["rss"] for _ in range(3))
     try:
