@@ -31,6 +31,15 @@ using namespace hmc::detail;
 
 namespace {
 
+// `count` distinct random points in the cube [0, extent]^3, in ascending
+// order, drawn from `rng` (which the caller may go on drawing from).
+std::vector<GridPoint> random_cube(std::mt19937& rng, std::size_t count, std::uint32_t extent) {
+  std::uniform_int_distribution<std::uint32_t> c(0, extent);
+  std::set<GridPoint> s;
+  while (s.size() < count) s.insert({c(rng), c(rng), c(rng)});
+  return {s.begin(), s.end()};
+}
+
 Decoded roundtrip(const Mesh& m, Fidelity f, Encoded* enc_out = nullptr, int bits = 12) {
   EncodeOptions o;
   o.bits = bits;
@@ -705,10 +714,7 @@ TEST_CASE("the peeling's decisions, kept across calls, give the same labels; the
   std::vector<std::vector<GridPoint>> sets;
   for (const Mesh& m : {samples::uv_sphere(14, 28), samples::torus(24, 12)}) sets.push_back(encode(m).value().points);
   std::mt19937 rng(7);
-  std::uniform_int_distribution<std::uint32_t> c(0, 4000);
-  std::set<GridPoint> cloud;
-  while (cloud.size() < 600) cloud.insert({c(rng), c(rng), c(rng)});
-  sets.emplace_back(cloud.begin(), cloud.end());
+  sets.push_back(random_cube(rng, 600, 4000));
   int peeled = 0, compared = 0;
   for (const auto& pts : sets) {
     const auto dt = delaunay(pts);
@@ -952,10 +958,7 @@ TEST_CASE("the repair's first step turns exactly the small closed sets of one la
     return out;
   };
   std::mt19937 rng(5);
-  std::uniform_int_distribution<std::uint32_t> c(0, 2000);
-  std::set<GridPoint> s;
-  while (s.size() < 700) s.insert({c(rng), c(rng), c(rng)});
-  const std::vector<GridPoint> pts(s.begin(), s.end());
+  const std::vector<GridPoint> pts = random_cube(rng, 700, 2000);
   const auto dt = delaunay(pts);
   int changed = 0;
   for (double share : {0.05, 0.2, 0.5, 0.8, 0.95}) {
@@ -1152,10 +1155,7 @@ TEST_CASE("toggle contexts are spec 11.5's, read plainly") {
   // every tetrahedron inside: hull faces on the interface) and random
   // candidate flags; every combination of the optional contexts.
   std::mt19937 rng(23);
-  std::uniform_int_distribution<std::uint32_t> c(0, 255);
-  std::set<GridPoint> s;
-  while (s.size() < 400) s.insert({c(rng), c(rng), c(rng)});
-  const std::vector<GridPoint> pts(s.begin(), s.end());
+  const std::vector<GridPoint> pts = random_cube(rng, 400, 255);
   const auto dt = delaunay(pts);
   const std::size_t nt = dt.tets.size();
   REQUIRE(nt > 1000);
