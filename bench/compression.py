@@ -56,7 +56,7 @@ ORDER = list(ANCHORS)  # report order: surfaces, then volumes
 BAR_LEVELS = 1.10    # 4-level bits / 1-level bits
 BAR_DECODE = 1.5     # decode all levels with reconstruction / one Delaunay (time)
 BAR_ENCODE = 4.0     # encode (4 levels) / one Delaunay (time)
-BAR_MEMORY = 1.5     # peak memory of decoding / of one Delaunay
+BAR_MEMORY = 1.5     # peak memory of decoding, and of encoding, / of one Delaunay
 DRACO_TOLERANCE = 0.05  # own Draco measurement vs anchor: flag beyond 5 %
 
 Q = 12
@@ -450,7 +450,8 @@ def plots(results, big, outdir, log):
     # and the 1M-point decoding race beside them.
     series = [("decode all levels + reconstruction / Delaunay (CPU time)", "r_dec", "tab:blue"),
               (f"encode {LEVELS} levels / Delaunay (CPU time)", "r_enc", "tab:orange"),
-              ("decode peak memory / Delaunay's", "r_mem", "tab:green")]
+              ("decode peak memory / Delaunay's", "r_mem", "tab:green"),
+              (f"encode {LEVELS} levels peak memory / Delaunay's", "r_mem_enc", "tab:olive")]
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(16, 6.5), gridspec_kw={"width_ratios": [6, 1]})
     w = 0.8 / len(series)
     for k, (label, key, c) in enumerate(series):
@@ -458,7 +459,7 @@ def plots(results, big, outdir, log):
         xs = x - 0.4 + w * (k + 0.5)
         ax.bar(xs, vals, w, label=label, color=c, edgecolor="black", linewidth=0.3)
         for xi, v in zip(xs, vals):
-            ax.text(xi, v * 1.05, f"{v:.2f}" if key == "r_mem" else f"{v:.1f}", ha="center", va="bottom",
+            ax.text(xi, v * 1.05, f"{v:.2f}" if key.startswith("r_mem") else f"{v:.1f}", ha="center", va="bottom",
                     fontsize=7, rotation=90, bbox=dict(facecolor="white", edgecolor="none", pad=0.3, alpha=0.8))
     ax.axhline(BAR_DECODE, color="black", linestyle="--", linewidth=1.2,
                label=f"bar ≤ {BAR_DECODE:g} (decode time; memory ≤ {BAR_MEMORY:g})")
@@ -533,19 +534,26 @@ def report(a, argv, tools, results, big, started, elapsed, loads, plot_files, ou
     say("")
     say(f"| model | points | {LEVELS}-level / 1-level bits (≤ {BAR_LEVELS:.2f}) | {LEVELS}-level bpp vs G-PCC (below) | "
         f"decode all + reconstruction / Delaunay time (≤ {BAR_DECODE:g}) | encode / Delaunay time (≤ {BAR_ENCODE:g}) | "
-        f"decode peak memory / Delaunay's (≤ {BAR_MEMORY:g}) |")
-    say("|---|---:|---|---|---|---|---|")
-    passes = [0] * 5
+        f"decode peak memory / Delaunay's (≤ {BAR_MEMORY:g}) | encode peak memory / Delaunay's (≤ {BAR_MEMORY:g}) |")
+    say("|---|---:|---|---|---|---|---|---|")
+    passes = [0] * 6
     for r in results:
         g = r["anchors"][2]
         ok = [r["r_levels"] <= BAR_LEVELS, g is not None and r["bpp4"] < g, r["r_dec"] <= BAR_DECODE,
-              r["r_enc"] <= BAR_ENCODE, r["r_mem"] <= BAR_MEMORY]
+              r["r_enc"] <= BAR_ENCODE, r["r_mem"] <= BAR_MEMORY, r["r_mem_enc"] <= BAR_MEMORY]
         passes = [p + int(o) for p, o in zip(passes, ok)]
         gp = f"{r['bpp4']:.2f} vs {g:.2f} {verdict(ok[1])}" if g else "– (no anchor)"
         say(f"| {r['name']} | {r['points']:,} | {r['r_levels']:.3f} {verdict(ok[0])} | {gp} | "
-            f"{r['r_dec']:.2f} {verdict(ok[2])} | {r['r_enc']:.1f} {verdict(ok[3])} | {r['r_mem']:.3f} {verdict(ok[4])} |")
+            f"{r['r_dec']:.2f} {verdict(ok[2])} | {r['r_enc']:.1f} {verdict(ok[3])} | {r['r_mem']:.3f} {verdict(ok[4])} | "
+            f"{r['r_mem_enc']:.3f} {verdict(ok[5])} |")
     n = len(results)
-    say(f"| **models passing** | | {passes[0]}/{n} | {passes[1]}/{n} | {passes[2]}/{n} | {passes[3]}/{n} | {passes[4]}/{n} |")
+    say(f"| **models passing** | | " + " | ".join(f"{p}/{n}" for p in passes) + " |")
+    say("")
+    say("The issue's memory bar (\"peak memory at most 1.5 times TetGen's own\") does not say whose peak, so both "
+        "processes are judged: the decoder's and, at "
+        f"{LEVELS} levels on one thread, the encoder's. The Delaunay's own peak is that of the whole `delaunay_time` "
+        "process, so on the small models the fixed memory of any process (the program and its libraries, "
+        f"{tools['floor']:.1f} MiB for /bin/true) weighs on both sides of the ratio.")
     say("")
     if big:
         ok = big["race_ratio"] <= 1

@@ -64,7 +64,6 @@ struct LevelPlan {
   std::vector<GridPoint> added;    // points this level adds to the next coarser one
   ReconParams params;
   Reconstruction rec;
-  Tetrahedralization dt;  // kept for the finest level only
   LevelReport report;
 };
 
@@ -501,7 +500,6 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
                           " points span no volume (all coplanar or collinear on the grid): the decoder rebuilds "
                           "connectivity from their 3D Delaunay tetrahedralization, so it rebuilds no " +
                           (rep.kind == Kind::surface ? "triangles" : "tetrahedra"));
-    if (k == 0) plan.dt = std::move(dt);
     plans.push_back(std::move(plan));
     work_done += std::pow(1.0 - 0.5 * options.removal_ratio, k);
     if (current.empty()) break;

@@ -33,6 +33,30 @@ Vec3 cross(const Vec3& a, const Vec3& b) {
 }
 double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 
+// Nodes of a tree over n items that splits every range of more than `leaf`
+// items at its middle (both trees below), so that their node lists are
+// allocated once at their final size: growing them by doubling left up to
+// half of the horse's 12 MB winding tree unused. The ranges of one depth
+// have at most two sizes, s and s + 1.
+std::size_t halving_tree_nodes(std::size_t n, std::size_t leaf) {
+  std::size_t nodes = 0;
+  std::vector<std::pair<std::size_t, std::size_t>> depth{{n, 1}}, next;  // (range size, ranges)
+  while (!depth.empty()) {
+    next.clear();
+    auto add = [&](std::size_t size, std::size_t count) {
+      for (auto& [s, c] : next)
+        if (s == size) return void(c += count);
+      next.push_back({size, count});
+    };
+    for (const auto& [size, count] : depth) {
+      nodes += count;
+      if (size > leaf) add(size / 2, count), add(size - size / 2, count);
+    }
+    depth.swap(next);
+  }
+  return nodes;
+}
+
 // Van Oosterom & Strackee: the solid angle of triangle abc seen from q is
 // 2·arg(den + i·det), with det and den below.
 struct HalfAngle {
@@ -82,7 +106,7 @@ WindingNumber::WindingNumber(const std::vector<Vec3>& points, const std::vector<
     : points_(points), tri_(triangles) {
   order_.resize(tri_.size());
   for (std::uint32_t i = 0; i < order_.size(); ++i) order_[i] = i;
-  nodes_.reserve(2 * tri_.size() / kLeafSize + 2);
+  nodes_.reserve(1 + (tri_.empty() ? 0 : halving_tree_nodes(tri_.size(), kLeafSize)));
   nodes_.push_back({});  // index 0 is never a child, so left == 0 marks a leaf
   Moments root;
   if (!tri_.empty()) build(0, static_cast<std::uint32_t>(tri_.size()), root);
@@ -326,10 +350,11 @@ ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<
     // segment through it changes nothing.
     if (n[0] != 0 || n[1] != 0 || n[2] != 0) tris_.push_back({a, b, c, n});
   };
+  tris_.reserve(triangles.size() + caps_.size());
   for (const auto& t : triangles) add(quarter(points[t[0]]), quarter(points[t[1]]), quarter(points[t[2]]));
   for (const auto& t : caps_) add(quarter(cap_points_[t[0]]), quarter(cap_points_[t[1]]), quarter(cap_points_[t[2]]));
+  boxes_.reserve(1 + (tris_.empty() ? 0 : halving_tree_nodes(tris_.size(), kBoxLeaf)));
   boxes_.push_back({});  // index 0 is never a child
-  boxes_.reserve(2 * tris_.size() / kBoxLeaf + 2);
   if (!tris_.empty()) build(0, static_cast<std::uint32_t>(tris_.size()));
 }
 
