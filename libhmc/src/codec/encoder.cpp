@@ -505,6 +505,9 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     if (current.empty()) break;
   }
   progress(static_cast<int>(plans.size()) - 1, 1);
+  // The input surface's winding trees served the planning only; the layers
+  // coded below (on one thread, all of them) need their memory more.
+  winding = WindingCache{};
   // The coarsest level adds nothing to a coarser one.
   plans.back().added.clear();
   std::vector<std::vector<std::uint8_t>> lossy_payloads;  // REFN payloads of plan_lossy, by plan

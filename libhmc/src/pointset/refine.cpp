@@ -314,7 +314,12 @@ std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 // per gap weight gaps[j], the symbols that ranking would give:
 // counts[j][((d * 9 + w) * 2 + x) * kAlphabet + s], as encode_impl's freq
 // (the coarse level must have been set to rank for other weights), and
-// keeps them: other[i * gaps.size() + j] for the i-th symbol.
+// keeps them: other[i * gaps.size() + j] for the i-th symbol. A count never
+// exceeds the nodes of one depth, which each hold an added point, so 32 bits
+// hold it (encode_impl admits fewer than 2^32 − 1 added points); that halves
+// the tables, q · 18 · 255 counts per weight and twice that with a twin,
+// which were the peak of a small model's encoding (7 MB of rocker_arm's 16).
+using Counts = std::vector<std::uint32_t>;
 class Traversal {
  public:
   static constexpr std::size_t kMaxWeights = kFarRanking + 1;  // weights 0 ... kFarRanking, each at most once
@@ -326,12 +331,12 @@ class Traversal {
             bool twin = false)
       : coarse_(coarse), added_(added), q_(q), gaps_(gaps), twin_(twin) {
     if (gaps.size() > kMaxWeights) fail(Status::internal_error, "refinement: too many ranking weights to count");
-    counts.assign(gaps.size(), std::vector<std::uint64_t>(static_cast<std::size_t>(q) * 18 * kAlphabet, 0));
+    counts.assign(gaps.size(), Counts(static_cast<std::size_t>(q) * 18 * kAlphabet, 0));
     if (twin) twin_counts_ = counts;
     visit(0, 0, 0, coarse.size(), 0, static_cast<std::uint32_t>(added.size()), nullptr);
   }
   std::vector<Symbol> symbols;
-  std::vector<std::vector<std::uint64_t>> counts;
+  std::vector<Counts> counts;
   std::vector<std::uint8_t> other;
 
   /// Trades symbols, counts and other with the plane's (a twin traversal).
@@ -421,7 +426,7 @@ class Traversal {
   std::vector<int> gaps_;
   bool twin_ = false;
   std::vector<Symbol> twin_symbols_;
-  std::vector<std::vector<std::uint64_t>> twin_counts_;
+  std::vector<Counts> twin_counts_;
   std::vector<std::uint8_t> twin_other_;
   std::vector<Symbol> nearest_symbols_;
   // nearest(): a traversal's symbols, known without visiting.
@@ -497,7 +502,8 @@ class CodedBitsMemo {
 
 // freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
 // nodes with w children holding coarse points and plane context x.
-TablePlan plan_tables(const std::vector<std::uint64_t>& freq, int q, int classes, int planes,
+template <class Count>
+TablePlan plan_tables(const std::vector<Count>& freq, int q, int classes, int planes,
                       const std::vector<int>& gaps, int fit, CodedBitsMemo& coded) {
   TablePlan plan;
   plan.classes = classes;
@@ -691,7 +697,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   // weights).
   const auto bytes_of = [](const TablePlan& p) { return (p.bits + 7) / 8; };
   CodedBitsMemo coded;  // this layer's plans only
-  const auto plan_of = [&](const std::vector<std::uint64_t>& freq, const std::vector<int>& gaps, int fit) {
+  const auto plan_of = [&](const auto& freq, const std::vector<int>& gaps, int fit) {
     std::optional<TablePlan> plan;
     for (int planes : plane_choices)
       for (int classes = 1; classes <= kMaxClasses; ++classes) {
@@ -738,9 +744,13 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
       std::vector<std::vector<std::uint64_t>> mixed_freq(2, freq);
       for (int d = 0; d < q; ++d) {
         const std::size_t at = static_cast<std::size_t>(d) * depth_rows;
-        const auto cost = [&](const std::vector<std::uint64_t>& f) {
+        const auto cost = [&](const auto& f) {
           double bits = 0;
-          for (std::size_t row = 0; row < 18; ++row) bits += entropy_bits(f.data() + at + row * kAlphabet, kAlphabet);
+          std::array<std::uint64_t, kAlphabet> row_counts;
+          for (std::size_t row = 0; row < 18; ++row) {
+            std::copy_n(f.begin() + static_cast<std::ptrdiff_t>(at + row * kAlphabet), kAlphabet, row_counts.begin());
+            bits += entropy_bits(row_counts.data(), kAlphabet);
+          }
           return bits;
         };
         const double plain = cost(freq);
