@@ -314,12 +314,38 @@ std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 // per gap weight gaps[j], the symbols that ranking would give:
 // counts[j][((d * 9 + w) * 2 + x) * kAlphabet + s], as encode_impl's freq
 // (the coarse level must have been set to rank for other weights), and
-// keeps them: other[i * gaps.size() + j] for the i-th symbol. A count never
-// exceeds the nodes of one depth, which each hold an added point, so 32 bits
-// hold it (encode_impl admits fewer than 2^32 − 1 added points); that halves
-// the tables, q · 18 · 255 counts per weight and twice that with a twin,
-// which were the peak of a small model's encoding (7 MB of rocker_arm's 16).
-using Counts = std::vector<std::uint32_t>;
+// keeps them: other[i * gaps.size() + j] for the i-th symbol.
+//
+// Counts: q · 18 rows of 255 counts, of which a layer uses a few dozen; only
+// those are stored (dense, all weights and a twin's, they took 7 MB of
+// rocker_arm's 16 MB encoding peak). A count never exceeds the nodes of one
+// depth, which each hold an added point, so 32 bits hold it (encode_impl
+// admits fewer than 2^32 − 1 added points).
+class Counts {
+ public:
+  explicit Counts(std::size_t rows) : at_(rows, kNone) {}
+  void add(std::size_t row, std::size_t symbol) {
+    if (at_[row] == kNone) {
+      at_[row] = data_.size();
+      data_.resize(data_.size() + kAlphabet, 0);
+    }
+    ++data_[at_[row] + symbol];
+  }
+  /// The row's kAlphabet counts, or nullptr when all are 0.
+  const std::uint32_t* row(std::size_t r) const { return at_[r] == kNone ? nullptr : data_.data() + at_[r]; }
+
+ private:
+  static constexpr std::size_t kNone = ~std::size_t{0};
+  std::vector<std::size_t> at_;       // per row: where its counts start in data_, or kNone
+  std::vector<std::uint32_t> data_;
+};
+// Row r of a frequency list (encode_impl's freq) or of Counts; nullptr for
+// a row of Counts that holds none.
+const std::uint64_t* row_of(const std::vector<std::uint64_t>& freq, std::size_t r) {
+  return freq.data() + r * kAlphabet;
+}
+const std::uint32_t* row_of(const Counts& counts, std::size_t r) { return counts.row(r); }
+
 class Traversal {
  public:
   static constexpr std::size_t kMaxWeights = kFarRanking + 1;  // weights 0 ... kFarRanking, each at most once
@@ -331,7 +357,7 @@ class Traversal {
             bool twin = false)
       : coarse_(coarse), added_(added), q_(q), gaps_(gaps), twin_(twin) {
     if (gaps.size() > kMaxWeights) fail(Status::internal_error, "refinement: too many ranking weights to count");
-    counts.assign(gaps.size(), Counts(static_cast<std::size_t>(q) * 18 * kAlphabet, 0));
+    counts.assign(gaps.size(), Counts(static_cast<std::size_t>(q) * 18));
     if (twin) twin_counts_ = counts;
     visit(0, 0, 0, coarse.size(), 0, static_cast<std::uint32_t>(added.size()), nullptr);
   }
@@ -396,7 +422,7 @@ class Traversal {
     std::array<std::uint8_t, kMaxWeights> s{};
     coarse_.last_keys().symbols(mask, gaps_.data(), gaps_.size(), occ, s.data());
     for (std::size_t j = 0; j < gaps_.size(); ++j) {
-      ++counts[j][row * kAlphabet + s[j]];
+      counts[j].add(row, s[j]);
       other.push_back(s[j]);
     }
     if (twin_) {
@@ -411,7 +437,7 @@ class Traversal {
           {symbol.depth, symbol.weight, coarse_.last_nearest_keys().symbol(mask, 0, occ), plane_context(0)});
       plane.symbols(mask, gaps_.data(), gaps_.size(), occ, s.data());
       for (std::size_t j = 0; j < gaps_.size(); ++j) {
-        ++twin_counts_[j][row * kAlphabet + s[j]];
+        twin_counts_[j].add(row, s[j]);
         twin_other_.push_back(s[j]);
       }
     }
@@ -502,8 +528,8 @@ class CodedBitsMemo {
 
 // freq[((d * 9 + w) * 2 + x) * kAlphabet + s]: symbols s at depth d of
 // nodes with w children holding coarse points and plane context x.
-template <class Count>
-TablePlan plan_tables(const std::vector<Count>& freq, int q, int classes, int planes,
+template <class Freq>
+TablePlan plan_tables(const Freq& freq, int q, int classes, int planes,
                       const std::vector<int>& gaps, int fit, CodedBitsMemo& coded) {
   TablePlan plan;
   plan.classes = classes;
@@ -537,8 +563,10 @@ TablePlan plan_tables(const std::vector<Count>& freq, int q, int classes, int pl
             if (planes == 2 && y != x) continue;
             const std::size_t row =
                 (static_cast<std::size_t>(d) * 9 + static_cast<std::size_t>(w)) * 2 + static_cast<std::size_t>(y);
+            const auto* counts = row_of(freq, row);
+            if (!counts) continue;
             for (std::size_t s = 0; s < kAlphabet; ++s) {
-              const std::uint64_t v = freq[row * kAlphabet + s];
+              const std::uint64_t v = counts[s];
               f[s] += v;
               used = used || v;
             }
@@ -748,7 +776,9 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
           double bits = 0;
           std::array<std::uint64_t, kAlphabet> row_counts;
           for (std::size_t row = 0; row < 18; ++row) {
-            std::copy_n(f.begin() + static_cast<std::ptrdiff_t>(at + row * kAlphabet), kAlphabet, row_counts.begin());
+            const auto* counts = row_of(f, static_cast<std::size_t>(d) * 18 + row);
+            if (!counts) continue;  // adds the 0 bits of an empty row
+            std::copy_n(counts, kAlphabet, row_counts.begin());
             bits += entropy_bits(row_counts.data(), kAlphabet);
           }
           return bits;
@@ -761,8 +791,13 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
             if (!(c < least[m])) continue;
             least[m] = c;
             mixed[static_cast<std::size_t>(m)][static_cast<std::size_t>(d)] = others[j];
-            std::copy_n(traversal.counts[j].begin() + static_cast<std::ptrdiff_t>(at), depth_rows,
-                        mixed_freq[static_cast<std::size_t>(m)].begin() + static_cast<std::ptrdiff_t>(at));
+            for (std::size_t row = 0; row < 18; ++row) {
+              const auto to = mixed_freq[static_cast<std::size_t>(m)].begin() +
+                              static_cast<std::ptrdiff_t>(at + row * kAlphabet);
+              const std::uint32_t* counts = traversal.counts[j].row(static_cast<std::size_t>(d) * 18 + row);
+              if (counts) std::copy_n(counts, kAlphabet, to);
+              else std::fill_n(to, kAlphabet, 0);
+            }
           }
         }
       }
