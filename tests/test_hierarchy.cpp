@@ -30,6 +30,7 @@
 
 #include "delaunay/delaunay.hpp"
 #include "hierarchy/hierarchy.hpp"
+#include "hierarchy/internal.hpp"
 #include "hmc/codec.hpp"
 #include "samples.hpp"
 #include "util/single_faces.hpp"
@@ -1067,4 +1068,35 @@ TEST_CASE("single_faces: the faces whose vertex set occurs once, in ascending or
       hull += dt.neighbors[t][static_cast<std::size_t>(k)] == kNoTet;
     }
   CHECK(single_faces(faces).size() == hull);
+
+  // A volume level's boundary (hierarchy::boundary_faces, whose faces are
+  // made from the tetrahedra as single_faces asks for them): the hull faces
+  // of the Delaunay, oriented outward (kFaceVertices), with every third
+  // tetrahedron given negatively oriented (its faces flipped back), in
+  // ascending order of the sorted triple.
+  LevelMesh volume;
+  volume.points = &pts;
+  volume.tetrahedra = dt.tets;
+  for (std::size_t t = 0; t < volume.tetrahedra.size(); t += 3) std::swap(volume.tetrahedra[t][2], volume.tetrahedra[t][3]);
+  const auto rotated = [](Tri f) {  // the same oriented face, smallest vertex first
+    while (f[0] > f[1] || f[0] > f[2]) f = {f[1], f[2], f[0]};
+    return f;
+  };
+  std::map<Tri, Tri> want;  // sorted triple -> oriented face
+  for (std::size_t t = 0; t < dt.tets.size(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      if (dt.neighbors[t][static_cast<std::size_t>(k)] != kNoTet) continue;
+      Tri f;
+      for (int i = 0; i < 3; ++i) f[static_cast<std::size_t>(i)] = dt.tets[t][static_cast<std::size_t>(kFaceVertices[k][i])];
+      Tri key = f;
+      std::sort(key.begin(), key.end());
+      want[key] = rotated(f);
+    }
+  std::vector<std::uint8_t> on;
+  const auto got = hierarchy::boundary_faces(volume, Kind::volume, &on);
+  REQUIRE(got.size() == want.size());
+  std::size_t i = 0;
+  for (const auto& [key, face] : want) CHECK(rotated(got[i++]) == face);
+  for (const auto& [key, face] : want)
+    for (std::uint32_t v : face) CHECK(on[v] == 1);
 }

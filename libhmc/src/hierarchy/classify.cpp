@@ -7,6 +7,7 @@
 #include "delaunay/predicates.hpp"
 #include "hierarchy/hierarchy.hpp"
 #include "hierarchy/internal.hpp"
+#include "util/error.hpp"
 #include "util/single_faces.hpp"
 
 namespace hmc::detail {
@@ -22,20 +23,29 @@ std::vector<std::array<std::uint32_t, 3>> boundary_faces(const LevelMesh& m, Kin
     for (const auto& t : m.triangles)
       if (usable(t, n)) out.push_back(t);
   } else if (kind == Kind::volume) {
-    std::vector<std::array<std::uint32_t, 3>> faces;
-    faces.reserve(m.tetrahedra.size() * 4);
-    for (const auto& t : m.tetrahedra) {
+    // The usable tetrahedra, each with its orientation in the top bit; their
+    // faces are made as single_faces() asks for them.
+    // Face indices fit in 32 bits: fewer than 2^30 tetrahedra.
+    if (m.tetrahedra.size() >= (std::size_t{1} << 30))
+      fail(Status::invalid_argument, "boundary classification: too many tetrahedra");
+    std::vector<std::uint32_t> tets;
+    tets.reserve(m.tetrahedra.size());
+    const auto& p = *m.points;
+    for (std::size_t i = 0; i < m.tetrahedra.size(); ++i) {
+      const auto& t = m.tetrahedra[i];
       if (!usable(t, n)) continue;
-      const auto& p = *m.points;
       const bool negative = orient3d(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) < 0;
-      for (int k = 0; k < 4; ++k) {
-        std::array<std::uint32_t, 3> f;
-        for (int i = 0; i < 3; ++i) f[i] = t[kFaceVertices[k][i]];
-        if (negative) std::swap(f[1], f[2]);
-        faces.push_back(f);
-      }
+      tets.push_back(static_cast<std::uint32_t>(i) | (negative ? 0x80000000u : 0u));
     }
-    out = single_faces(faces);
+    out = single_faces(4 * tets.size(), [&](std::size_t i) {
+      const std::uint32_t e = tets[i / 4];
+      const auto& t = m.tetrahedra[e & 0x7FFFFFFFu];
+      const int k = static_cast<int>(i % 4);
+      std::array<std::uint32_t, 3> f;
+      for (int j = 0; j < 3; ++j) f[static_cast<std::size_t>(j)] = t[static_cast<std::size_t>(kFaceVertices[k][j])];
+      if (e & 0x80000000u) std::swap(f[1], f[2]);
+      return f;
+    });
   }
   if (on_boundary_face)
     for (const auto& f : out)

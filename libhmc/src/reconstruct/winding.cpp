@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "delaunay/predicates.hpp"
+#include "util/error.hpp"
 #include "util/single_faces.hpp"
 
 namespace hmc::detail {
@@ -499,13 +500,14 @@ std::vector<Triangle> boundary_faces(const std::vector<Vec3>& points, const std:
 }
 
 std::vector<Triangle> boundary_faces(const std::vector<Tetrahedron>& positive) {
-  std::vector<Triangle> faces;
-  faces.reserve(positive.size() * 4);
   // Faces opposite each vertex, counter-clockwise from outside.
-  const int fv[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  for (const auto& t : positive)
-    for (const auto& f : fv) faces.push_back({t[f[0]], t[f[1]], t[f[2]]});
-  return single_faces(faces);
+  static constexpr int fv[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  if (positive.size() >= (std::size_t{1} << 30)) fail(Status::invalid_argument, "boundary faces: too many tetrahedra");
+  return single_faces(4 * positive.size(), [&positive](std::size_t i) {
+    const auto& t = positive[i / 4];
+    const auto& f = fv[i % 4];
+    return Triangle{t[f[0]], t[f[1]], t[f[2]]};
+  });
 }
 
 }  // namespace hmc::detail
