@@ -24,8 +24,7 @@ std::vector<std::array<std::uint32_t, 3>> boundary_faces(const LevelMesh& m, Kin
       if (usable(t, n)) out.push_back(t);
   } else if (kind == Kind::volume) {
     // The usable tetrahedra, each with its orientation in the top bit; their
-    // faces are made as single_faces() asks for them.
-    // Face indices fit in 32 bits: fewer than 2^30 tetrahedra.
+    // faces are made as single_faces() asks for them, numbered in 32 bits.
     if (m.tetrahedra.size() >= (std::size_t{1} << 30))
       fail(Status::invalid_argument, "boundary classification: too many tetrahedra");
     std::vector<std::uint32_t> tets;

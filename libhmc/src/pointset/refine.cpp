@@ -312,7 +312,7 @@ std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 
 // The symbols of the coarse level's ranking. With `gaps`, it also counts,
 // per gap weight gaps[j], the symbols that ranking would give:
-// counts[j][((d * 9 + w) * 2 + x) * kAlphabet + s], as encode_impl's freq
+// counts[j].row((d * 9 + w) * 2 + x)[s], as encode_impl's freq
 // (the coarse level must have been set to rank for other weights), and
 // keeps them: other[i * gaps.size() + j] for the i-th symbol.
 //
