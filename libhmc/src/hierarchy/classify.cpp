@@ -29,10 +29,10 @@ std::vector<std::array<std::uint32_t, 3>> boundary_faces(const LevelMesh& m, Kin
       fail(Status::invalid_argument, "boundary classification: too many tetrahedra");
     std::vector<std::uint32_t> tets;
     tets.reserve(m.tetrahedra.size());
-    const auto& p = *m.points;
     for (std::size_t i = 0; i < m.tetrahedra.size(); ++i) {
       const auto& t = m.tetrahedra[i];
       if (!usable(t, n)) continue;
+      const auto& p = *m.points;  // set: a usable tetrahedron's vertices are below its size
       const bool negative = orient3d(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) < 0;
       tets.push_back(static_cast<std::uint32_t>(i) | (negative ? 0x80000000u : 0u));
     }
