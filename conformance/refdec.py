@@ -3,11 +3,12 @@
 """refdec: a second, independent HMC decoder, written from spec/hmc.md alone.
 
 It decodes the points of every level (every base and refinement coder) and parses
-and validates all side information (HEAD, SQNT, VQTB, BASE, REFN, RCON),
-but does not build the
-Delaunay tetrahedralization or reconstruct triangles and tetrahedra: it
-writes the "points" profile of the canonical dump (spec/conformance.md),
-header.json and level-K.points.
+and validates all side information (HEAD, SQNT, VQTB, BASE, REFN, RCON);
+for kinds surface and volume it also rebuilds every level's triangles or
+tetrahedra (section 11, in refrecon.py, on the canonical Delaunay of
+refdelaunay.py, both written from spec/hmc.md and spec/delaunay.md alone):
+it writes the "full" profile of the canonical dump (spec/conformance.md),
+header.json, level-K.points and level-K.simplices.
 
     refdec.py IN.hmc OUTDIR
 
@@ -23,6 +24,8 @@ import os
 import struct
 import sys
 import zlib
+
+import refrecon  # §11 reconstruction (full profile), beside this file
 
 SIGNATURE = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
 KIND_NAMES = {0: "points", 1: "surface", 2: "volume"}
@@ -793,6 +796,7 @@ def parse_rcon(payload, n, form=1):
             r.fail("multipliers not strictly increasing")
         mult.append(m)
     counts = [n] + [0] * (K - 1)
+    classes = [0] * n  # §10.1: the class of each point (refrecon.py, §11.1)
     if K > 1:
         counts = [0] * K
         br = BitReader(payload, r.pos, "bad_layer", "RCON classes")
@@ -804,10 +808,12 @@ def parse_rcon(payload, n, form=1):
             if listed and listed[-1] >= n:
                 raise DecodeError("bad_layer", "RCON: class list entry %d >= %d points" % (listed[-1], n))
             counts[d] = n - len(listed)
+            classes = [d] * n
             code = read_code(br, K - 1, form) if K > 2 else None
-            for _ in listed:
+            for v in listed:
                 s = code.decode(br, "bad_layer") if code else 0
                 counts[s if s < d else s + 1] += 1
+                classes[v] = s if s < d else s + 1
         elif compact:  # §10.1: classes in groups of G points, digits base K
             G = br.bits(3) + 1
             A = K ** G
@@ -819,13 +825,15 @@ def parse_rcon(payload, n, form=1):
                 for i in range(G):
                     if b * G + i < n:
                         counts[s % K] += 1
+                        classes[b * G + i] = s % K
                     elif s % K:
                         raise DecodeError("bad_layer", "RCON: a class group gives a class to a point beyond the last")
                     s //= K
         else:
             code = read_code(br, K, form)
-            for _ in range(n):
-                counts[code.decode(br, "bad_layer")] += 1
+            for v in range(n):
+                classes[v] = code.decode(br, "bad_layer")
+                counts[classes[v]] += 1
         r.pos = br.pad()
 
     def index_list(what, limit):
@@ -849,8 +857,10 @@ def parse_rcon(payload, n, form=1):
     border = index_list("border", n)
     toggles = [0] * (240 if neighbour_contexts else 80 if vertex_contexts else 40 if candidate_contexts else 8)
     inverted = []
+    toggle_list, toggle_ranks = [], []
     if not compact:
-        toggles = len(index_list("toggle", None))  # checked against the tetrahedra only when reconstructing
+        toggle_list = index_list("toggle", None)  # checked against the tetrahedra only when reconstructing
+        toggles = len(toggle_list)
         drops = index_list("drop", None)
         r.end()
     else:
@@ -860,7 +870,8 @@ def parse_rcon(payload, n, form=1):
         br = BitReader(payload, r.pos, "bad_layer", "RCON toggles")
         for j in range(len(toggles)):
             flag = [0] if neighbour_contexts else None
-            toggles[j] = len(rice_list(br, "toggle rank of context %d" % j, flag))
+            toggle_ranks.append(rice_list(br, "toggle rank of context %d" % j, flag))
+            toggles[j] = len(toggle_ranks[-1])
             if flag and flag[0]:
                 inverted.append(j)
         br.finish()
@@ -869,7 +880,10 @@ def parse_rcon(payload, n, form=1):
             "neighbour_contexts": neighbour_contexts, "inverted": inverted, "scale_rank": k,
             "filters": thresholds,
             "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
-            "drops": len(drops)}
+            "drops": len(drops),
+            # the lists themselves, for the reconstruction (refrecon.py)
+            "inherit_border": flags >> 3 & 1, "classes": classes, "border_list": border,
+            "toggle_list": toggle_list, "toggle_ranks": toggle_ranks, "drop_list": drops}
 
 
 # ---------------------------------------------------------------- §2, §3, §12 container
@@ -1011,8 +1025,14 @@ def decode(data):
         elif t == "RCON":
             need(st["kind"] != 0, "RCON in a stream of kind points")
             need(pending_rcon, "RCON without a layer chunk before it")
-            parse_rcon(payload, len(current), st["tables"])
+            rc = parse_rcon(payload, len(current), st["tables"])
             pending_rcon = False
+            # §11: the level's triangles or tetrahedra (refrecon.py)
+            B, st["border_state"] = refrecon.resolve_border(rc, current, st.get("border_state"))
+            try:
+                st.setdefault("simplices", {})[st["L"] - layers] = refrecon.reconstruct(st["kind"], current, rc, B)
+            except refrecon.ReconError as e:
+                raise DecodeError(e.cls, e.msg)
             levels.append((st["L"] - layers, current))
         elif t == "HEND":
             need(len(payload) == 0, "non-empty HEND")
@@ -1070,6 +1090,9 @@ def main(argv):
         for K, pts in levels:
             with open(os.path.join(out, "level-%d.points" % K), "w", newline="\n") as f:
                 f.write("".join("%d %d %d\n" % p for p in pts))
+            if K in st.get("simplices", {}):  # conformance.md §2.3: indices sorted within and across lines
+                with open(os.path.join(out, "level-%d.simplices" % K), "w", newline="\n") as f:
+                    f.write("".join(" ".join(map(str, s)) + "\n" for s in sorted(tuple(sorted(s)) for s in st["simplices"][K])))
     except OSError as e:
         sys.stderr.write("refdec: %s: io_error: %s\n" % (out, e))
         return 4
