@@ -275,6 +275,12 @@ hmc_status hmc_encoder_encode(hmc_encoder* encoder, const double* xyz, size_t po
     m.tetrahedra.resize(tetrahedron_count);
     for (std::size_t i = 0; i < tetrahedron_count; ++i)
       m.tetrahedra[i] = {tetrahedra[4 * i], tetrahedra[4 * i + 1], tetrahedra[4 * i + 2], tetrahedra[4 * i + 3]};
+#ifdef HMC_NO_ENCODER
+    // A decoder-only build (HMC_BUILD_ENCODER=OFF): the handle and its options
+    // still work, so that the ABI is the same, but nothing can be encoded.
+    encoder->message = "libhmc was built without the encoder (HMC_BUILD_ENCODER=OFF)";
+    return HMC_UNSUPPORTED_FORMAT;
+#else
     auto r = hmc::encode(m, encoder->options);
     if (!r) {
       encoder->message = r.error().message;
@@ -287,6 +293,7 @@ hmc_status hmc_encoder_encode(hmc_encoder* encoder, const double* xyz, size_t po
       for (const auto& n : r.value().report.notes) encoder->notes += n + "\n";
     }
     return s;
+#endif
   });
 }
 

@@ -719,4 +719,7 @@ Result<StreamInfo> inspect(const std::uint8_t* data, std::size_t size, const Dec
   return guarded<Result<StreamInfo>>([&] { return Result<StreamInfo>(inspect_impl(data, size, limits)); });
 }
 
+// Here rather than in encoder.cpp: a decoder-only build has it too.
+const char* version_string() noexcept { return HMC_VERSION_STRING; }
+
 }  // namespace hmc

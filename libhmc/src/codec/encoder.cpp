@@ -593,8 +593,6 @@ const char* kind_name(Kind k) noexcept {
   return "unknown";
 }
 
-const char* version_string() noexcept { return HMC_VERSION_STRING; }
-
 const char* boundary_mode_name(hmc::BoundaryMode m) noexcept {
   switch (m) {
     case hmc::BoundaryMode::constant: return "constant";

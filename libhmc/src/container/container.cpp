@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 #include "container/container.hpp"
 
+#ifndef HMC_NO_ZLIB
 #include <zlib.h>
+#endif
 
+#include <array>
 #include <cstring>
 
 #include "util/bytes.hpp"
@@ -10,6 +13,34 @@
 
 namespace hmc::detail {
 
+#ifdef HMC_NO_ZLIB
+namespace {
+// A build without zlib (HMC_WITH_ZLIB=OFF, e.g. WebAssembly): the same
+// CRC-32 as zlib's crc32() (reflected polynomial 0xEDB88320, initial value
+// and final xor 0xFFFFFFFF), one table look-up per byte.
+std::array<std::uint32_t, 256> make_crc_table() {
+  std::array<std::uint32_t, 256> t{};
+  for (std::uint32_t i = 0; i < 256; ++i) {
+    std::uint32_t c = i;
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    t[i] = c;
+  }
+  return t;
+}
+
+std::uint32_t crc_update(std::uint32_t crc, const std::uint8_t* p, std::size_t n) {
+  static const std::array<std::uint32_t, 256> table = make_crc_table();
+  crc = ~crc;
+  for (std::size_t i = 0; i < n; ++i) crc = table[(crc ^ p[i]) & 0xFFu] ^ (crc >> 8);
+  return ~crc;
+}
+}  // namespace
+
+std::uint32_t chunk_crc(const ChunkType& type, const std::uint8_t* payload, std::size_t n) {
+  const std::uint32_t crc = crc_update(0u, reinterpret_cast<const std::uint8_t*>(type.data()), 4);
+  return crc_update(crc, payload, n);
+}
+#else
 std::uint32_t chunk_crc(const ChunkType& type, const std::uint8_t* payload, std::size_t n) {
   uLong crc = crc32(0L, Z_NULL, 0);
   crc = crc32(crc, reinterpret_cast<const Bytef*>(type.data()), 4);
@@ -22,6 +53,7 @@ std::uint32_t chunk_crc(const ChunkType& type, const std::uint8_t* payload, std:
   }
   return static_cast<std::uint32_t>(crc);
 }
+#endif
 
 ContainerWriter::ContainerWriter() {
   out_.assign(std::begin(kSignature), std::end(kSignature));

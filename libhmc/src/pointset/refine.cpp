@@ -285,7 +285,7 @@ void check_grid(const std::vector<GridPoint>& points, int q, const char* name) {
 void check_coarse(const std::vector<GridPoint>& coarse, int q) {
   if (q < 1 || q > 21) fail(Status::invalid_argument, std::string(kWhat) + ": q must be 1..21");
   if (coarse.empty()) fail(Status::invalid_argument, std::string(kWhat) + ": the coarse level is empty");
-  if (coarse.size() >= (std::size_t{1} << 32) - 1)
+  if (std::uint64_t{coarse.size()} >= (std::uint64_t{1} << 32) - 1)
     fail(Status::invalid_argument, std::string(kWhat) + ": too many coarse points");
   check_grid(coarse, q, "coarse");
   for (std::size_t i = 1; i < coarse.size(); ++i)
@@ -684,7 +684,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   sort_canonical(coarse);
   check_coarse(coarse, q);
   check_grid(added_in, q, "added");
-  if (added_in.size() >= (std::size_t{1} << 32) - 1)
+  if (std::uint64_t{added_in.size()} >= (std::uint64_t{1} << 32) - 1)
     fail(Status::invalid_argument, std::string(kWhat) + ": too many added points");
   if (forced && (forced->neighbours < 0 || forced->neighbours > kMaxNeighbours || forced->classes < 1 ||
                  forced->classes > kMaxClasses || forced->gap < 0 ||

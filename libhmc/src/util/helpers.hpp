@@ -29,6 +29,12 @@ class HelperBudget {
   /// the job: wait for every future it returned.
   template <class Job>
   auto try_run(Job job) -> std::future<decltype(job())> {
+#ifdef HMC_NO_THREADS
+    // A platform without threads (WebAssembly without -pthread): every part
+    // does its work on the caller's thread, which computes the same result.
+    (void)job;
+    return {};
+#endif
     if (free_.fetch_sub(1) <= 0) {
       free_.fetch_add(1);
       return {};
