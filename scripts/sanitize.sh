@@ -6,13 +6,15 @@
 #     -DHMC_SANITIZE=address,undefined (with g++ when clang is missing or
 #     the tree does not build with it: then clang's errors are printed as a
 #     warning); runs the whole CTest suite, fuzz corpus replays included.
-#  2. build-fuzz/: when clang has libFuzzer, the fuzz targets
-#     (-DHMC_BUILD_FUZZ=ON); runs each, two at a time, for HMC_FUZZ_SECONDS s
-#     (default 20) from its seed corpus and regression inputs.
+#  2. when clang has libFuzzer, the same build also makes the fuzz targets
+#     (-DHMC_BUILD_FUZZ=ON: one instrumented library serves both, which
+#     saves CI a second build of it); runs each, two at a time, for
+#     HMC_FUZZ_SECONDS s (default 20) from its seed corpus and regression
+#     inputs.
 #
 # Any sanitizer report, failing test, fuzz crash, leak or hung input
 # (over 30 s) fails the script; a fuzz failure's input is left in
-# build-fuzz/smoke/artifacts/<target>/ (add it to fuzz/regressions/<target>/
+# build-asan/smoke/artifacts/<target>/ (add it to fuzz/regressions/<target>/
 # once fixed, see fuzz/README.md). Installs clang and libclang-rt-14-dev
 # when missing, like scripts/setup.sh does for the rest.
 set -eu
@@ -21,7 +23,6 @@ HMC_SETUP_NO_BUILD=1
 hmc_install_missing clang libclang-rt-14-dev || echo "sanitize: cannot install clang; using g++" >&2
 
 ASAN_BUILD=${HMC_ASAN_BUILD:-$HMC_ROOT/build-asan}
-FUZZ_BUILD=${HMC_FUZZ_BUILD:-$HMC_ROOT/build-fuzz}
 FUZZ_SECONDS=${HMC_FUZZ_SECONDS:-20}
 # Every fuzz target, as fuzz/CMakeLists.txt lists them.
 TARGETS=$(sed -n 's/^set(HMC_FUZZ_TARGETS \(.*\))$/\1/p' "$HMC_ROOT/fuzz/CMakeLists.txt")
@@ -35,15 +36,17 @@ OPT="-O1 -g1 -DNDEBUG"
 LOGS=$(mktemp -d)
 trap 'rm -rf "$LOGS"' EXIT INT TERM
 
-# build_asan CC CXX: configure and build $ASAN_BUILD; output in $LOGS/build.log.
+# build_asan CC CXX [CMAKE_ARGS...]: configure and build $ASAN_BUILD; output in $LOGS/build.log.
 # The test sources are compiled first: they do not wait for the library, and
 # they are where a compiler that rejects the tree usually says so (then the
 # fallback costs seconds, not a whole library build).
 build_asan() {
+  cc=$1 cxx=$2
+  shift 2
   cmake -S "$HMC_ROOT" -B "$ASAN_BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_C_FLAGS_RELWITHDEBINFO="$OPT" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$OPT" \
-    -DCMAKE_C_COMPILER="$1" -DCMAKE_CXX_COMPILER="$2" -DHMC_SANITIZE=address,undefined \
-    -DHMC_BUILD_BENCH=OFF >"$LOGS/build.log" 2>&1 || return 1
+    -DCMAKE_C_COMPILER="$cc" -DCMAKE_CXX_COMPILER="$cxx" -DHMC_SANITIZE=address,undefined \
+    -DHMC_BUILD_BENCH=OFF "$@" >"$LOGS/build.log" 2>&1 || return 1
   test_objects=$(ninja -C "$ASAN_BUILD" -t targets all 2>/dev/null |
                  sed -n 's#^\(tests/CMakeFiles/[^:]*\.o\): .*#\1#p')
   if [ -n "$test_objects" ]; then
@@ -56,10 +59,14 @@ build_asan() {
 start=$(date +%s)
 have_clang=0
 command -v clang++ >/dev/null 2>&1 && command -v clang >/dev/null 2>&1 && have_clang=1
+# libFuzzer: clang only, and only if it links.
+have_fuzzer=0
+printf 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }\n' >"$LOGS/p.cpp"
+if [ "$have_clang" = 1 ] && clang++ -fsanitize=fuzzer "$LOGS/p.cpp" -o "$LOGS/p" 2>/dev/null; then have_fuzzer=1; fi
 CXX_SAN=g++
 if [ "$have_clang" = 1 ]; then
   echo "sanitize: clang++, address,undefined -> $ASAN_BUILD"
-  if build_asan clang clang++; then
+  if build_asan clang clang++ -DHMC_BUILD_FUZZ=$([ "$have_fuzzer" = 1 ] && echo ON || echo OFF); then
     CXX_SAN=clang++
   else
     # Not fatal: g++ is the project's compiler. Say loudly what clang rejects.
@@ -81,24 +88,13 @@ echo "sanitize: built in $(( $(date +%s) - start )) s; running the test suite"
 ctest --test-dir "$ASAN_BUILD" --output-on-failure -j "$JOBS" -E "conformance_refdec|test_consumer|stream_levels_example"
 echo "sanitize: sanitizer build and tests took $(( $(date +%s) - start )) s"
 
-# libFuzzer: clang only, and only if it links.
-printf 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }\n' >"$LOGS/p.cpp"
-if [ "$have_clang" != 1 ] || ! clang++ -fsanitize=fuzzer "$LOGS/p.cpp" -o "$LOGS/p" 2>/dev/null; then
+if [ "$have_fuzzer" != 1 ] || [ "$CXX_SAN" != clang++ ]; then
   echo "sanitize: clang with libFuzzer is not available; fuzz targets skipped"
   exit 0
 fi
 
 fstart=$(date +%s)
-cmake -S "$HMC_ROOT" -B "$FUZZ_BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_C_FLAGS_RELWITHDEBINFO="$OPT" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$OPT" \
-  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
-  -DHMC_BUILD_FUZZ=ON -DHMC_BUILD_TESTS=OFF -DHMC_BUILD_TOOLS=OFF -DHMC_BUILD_BENCH=OFF >/dev/null
-fuzz_bins=""
-for t in $TARGETS; do fuzz_bins="$fuzz_bins fuzz_$t"; done
-# shellcheck disable=SC2086
-cmake --build "$FUZZ_BUILD" -j "$JOBS" --target $fuzz_bins
-
-SMOKE=$FUZZ_BUILD/smoke
+SMOKE=$ASAN_BUILD/smoke
 rm -rf "$SMOKE"
 # smoke TARGET: fuzz it for FUZZ_SECONDS; writes $SMOKE/TARGET.log and .ok.
 smoke() {
@@ -109,7 +105,7 @@ smoke() {
   # machine's stalls once made a 0.35 s decode input take 7 s (2026-11-23);
   # a hang still fails, and slow inputs are judged in fuzz/README.md's runs.
   # shellcheck disable=SC2086
-  "$FUZZ_BUILD/fuzz/fuzz_$1" -max_total_time="$FUZZ_SECONDS" -timeout=30 -rss_limit_mb=2048 \
+  "$ASAN_BUILD/fuzz/fuzz_$1" -max_total_time="$FUZZ_SECONDS" -timeout=30 -rss_limit_mb=2048 \
     -print_final_stats=1 -artifact_prefix="$SMOKE/artifacts/$1/" "$SMOKE/corpus/$1" $seeds \
     >"$SMOKE/$1.log" 2>&1 && touch "$SMOKE/$1.ok"
 }
@@ -135,4 +131,4 @@ for t in $TARGETS; do
   fi
 done
 [ "$failed" = 0 ] || exit 1
-echo "sanitize: fuzz build and smoke took $(( $(date +%s) - fstart )) s; total $(( $(date +%s) - start )) s"
+echo "sanitize: fuzz smoke took $(( $(date +%s) - fstart )) s; total $(( $(date +%s) - start )) s"
