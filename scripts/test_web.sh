@@ -12,7 +12,13 @@
 set -eu
 HMC_SETUP_NO_BUILD=1
 . "$(dirname "$0")/setup.sh"
-hmc_install_missing emscripten nodejs npm chromium
+# Node.js and npm by command: a Node.js from elsewhere (NodeSource's
+# package carries npm) conflicts with Debian's npm package.
+web_packages="emscripten chromium"
+command -v node >/dev/null 2>&1 || web_packages="$web_packages nodejs"
+command -v npm >/dev/null 2>&1 || web_packages="$web_packages npm"
+# shellcheck disable=SC2086
+hmc_install_missing $web_packages
 LOG=$(mktemp)
 trap 'rm -f "$LOG"' EXIT INT TERM
 # quiet NAME CMD...: runs CMD into $LOG; prints its last lines, or all of
