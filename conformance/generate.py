@@ -720,6 +720,8 @@ def describe_rcon(payload, n):
     """Fields of an RCON for case.json (toggles: one count, or one per
     context in the compact form)."""
     d = refdec.parse_rcon(payload, n)
+    for k in ("inherit_border", "classes", "border_list", "toggle_list", "toggle_ranks", "drop_list"):
+        d.pop(k)  # the lists refdec.py keeps for its reconstruction
     d["filters"] = {str(i): t for i, t in sorted(d["filters"].items())}
     return d
 
@@ -1294,6 +1296,27 @@ def hb_rcon_neighbour_contexts(bad=False):
     return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
 
 
+def hb_rcon_filters():
+    # Filters 3 (lone triangle) and 1 (min/max edge ratio), each alone on a
+    # level where it changes the output (in the other cases they remove
+    # faces that no later step looks at). The coarsest level (scale rank 3,
+    # multiplier 256: few candidates) loses 7 lone candidate faces, all of
+    # them faces of outside tetrahedra without interface faces, which then
+    # count one candidate face less: with candidate contexts their ranks in
+    # context 0 (200 tetrahedra) are toggled, so a decoder that kept the
+    # lone faces would toggle others. The finer level's filter 1 at T = 20
+    # removes the thin hull faces, so the flood enters there (348 instead of
+    # 404 triangles).
+    q = 6
+    pts = sphere_pts(160, q, 51)
+    lv = nested(pts, [70, 160], 52)
+    n0, n1 = len(lv[0]), len(lv[1])
+    rc0 = rcon_payload(n0, flags=1, scale_rank=3, multipliers=(256,), filters={3: 1}, compact=True, candidate_contexts=True,
+                       toggles={0: (58, 62, 85, 90, 99, 118, 130, 144, 177)})
+    rc1 = rcon_payload(n1, flags=1, scale_rank=6, multipliers=(900,), filters={1: 20})
+    return hand_stream(1, q, lv, [(4, 1, True)], rcons=[rc0, rc1])
+
+
 def hb_rcon_compact_volume():
     q = 5
     pts = rand_pts(120, q, 34)
@@ -1735,6 +1758,8 @@ HANDBUILT = [
      "hand-written compact RCON with vertex contexts (flag bits 5 and 6): toggle ranks in contexts 37-79 of two levels of a sphere, one with a class list", sec("rcon", "recon")),
     ("rcon-compact-volume", hb_rcon_compact_volume, F,
      "hand-written compact RCON for a volume: repair then toggles by context, K = 64 in groups of 2 (4096 symbols)", sec("rcon", "recon")),
+    ("rcon-filters-lone-ratio", hb_rcon_filters, F,
+     "hand-written RCON where filters 3 (lone triangle, seen through the candidate contexts of toggle ranks) and 1 (min/max edge ratio, letting the flood in) each change the output, one per level of a sphere", sec("rcon", "recon")),
     ("rcon-handbuilt-volume", hb_rcon_volume, F,
      "hand-written RCON for a volume: repair, filters 1, 4 and 5, K = 1 and K = 64, scale rank 1 and 10, toggles", sec("rcon", "recon")),
 ]

@@ -73,6 +73,9 @@ def resolve_border(rc, points, coarser):
 
 
 class Level:
+    BUBBLE_MAX = 4     # section 11.4a: bubbles of at most 4 tetrahedra
+    REPAIR_ROUNDS = 6  # section 11.4a: rounds 0 ... 5
+
     def __init__(self, kind, P, rc, B):
         self.kind = kind
         self.P = P
@@ -318,7 +321,7 @@ class Level:
                     if u >= 0 and not done[u] and inside[u] == lab:
                         done[u] = True
                         comp.append(u)
-            if len(comp) > 4:
+            if len(comp) > self.BUBBLE_MAX:
                 continue
             if not lab and any(nbr[x][k] < 0 for x in comp for k in range(4)):
                 continue
@@ -410,7 +413,7 @@ class Level:
         inside, tets = self.inside, self.tets
         flips = 0
         rounds = 0
-        for rnd in range(6):
+        for rnd in range(self.REPAIR_ROUNDS):
             changed = False
             for v in range(len(self.P)):
                 if self.defects(v) == 0:
@@ -474,12 +477,7 @@ class Level:
         if rc["neighbour_contexts"]:
             inverted = set(rc["inverted"])
             for t in range(M):
-                n = 0
-                for k in range(4):
-                    u = nbr[t][k]
-                    if 0 <= u < t and toggled[u]:
-                        n += 1
-                j = 3 * ctx[t] + min(n, 2)
+                j = 3 * ctx[t] + min(self.toggled_before(t, toggled), 2)
                 r = count[j]
                 count[j] += 1
                 toggled[t] = (r in listed[j]) != (j in inverted)
@@ -500,6 +498,10 @@ class Level:
                 n += 1
         self.stats["toggled"] = n
         self.stats["toggle_contexts"] = sorted(j for j in range(J) if lists[j] or j in rc.get("inverted", ()))
+
+    def toggled_before(self, t, toggled):
+        """Section 11.5, n(t): the faces of t shared with a toggled u < t."""
+        return sum(1 for u in self.nbr[t] if 0 <= u < t and toggled[u])
 
     # ------------------------------------------------------------ 11.6
     def output(self):
