@@ -22,15 +22,15 @@
 #include <string>
 
 #include "codec/format.hpp"
-#include "codec/input_grid.hpp"
+#include "encoder/input_grid.hpp"
 #include "delaunay/delaunay.hpp"
 #include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
 #include "quant/scalar_quantizer.hpp"
 #include "reconstruct/reconstruct.hpp"
-#include "reconstruct/tuning.hpp"
-#include "reconstruct/distance.hpp"
-#include "reconstruct/winding.hpp"
+#include "encoder/tuning.hpp"
+#include "encoder/distance.hpp"
+#include "encoder/winding.hpp"
 #include "util/kdtree.hpp"
 
 using namespace hmc;

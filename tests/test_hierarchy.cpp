@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 // Classification and decimation of one hierarchy level (thesis §3.2–3.4,
-// libhmc/src/hierarchy/hierarchy.hpp), applied level after level.
+// libhmc/src/encoder/hierarchy/hierarchy.hpp), applied level after level.
 //
 // Coarser levels for the tests are built here, not by the codec: a volume's
 // next level is the Delaunay tetrahedralization of the retained points (the
@@ -29,8 +29,8 @@
 #include <vector>
 
 #include "delaunay/delaunay.hpp"
-#include "hierarchy/hierarchy.hpp"
-#include "hierarchy/internal.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
+#include "encoder/hierarchy/internal.hpp"
 #include "hmc/codec.hpp"
 #include "samples.hpp"
 #include "util/single_faces.hpp"

@@ -20,7 +20,7 @@
 #include "pointset/octree.hpp"
 #include "quant/vector_quantizer.hpp"
 #include "quant/scalar_quantizer.hpp"
-#include "reconstruct/distance.hpp"
+#include "encoder/distance.hpp"
 #include "samples.hpp"
 #include "support/why.hpp"
 

@@ -11,7 +11,7 @@
 #include <set>
 
 #include "codec/format.hpp"
-#include "codec/input_grid.hpp"
+#include "encoder/input_grid.hpp"
 #include "container/container.hpp"
 #include "entropy/bitio.hpp"
 #include "delaunay/delaunay.hpp"
@@ -19,8 +19,8 @@
 #include "hmc/codec.hpp"
 #include "quant/scalar_quantizer.hpp"
 #include "reconstruct/reconstruct.hpp"
-#include "reconstruct/tuning.hpp"
-#include "reconstruct/winding.hpp"
+#include "encoder/tuning.hpp"
+#include "encoder/winding.hpp"
 #include "samples.hpp"
 #include "support/why.hpp"
 #include "util/bytes.hpp"

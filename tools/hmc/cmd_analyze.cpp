@@ -143,7 +143,7 @@ EdgeStats edge_stats(const Mesh& m, int classes) {
 // Boundary / inner classification of a volume level by both methods of the
 // thesis (§3.3 faces owned by one tetrahedron; §3.2 solid-angle sum below
 // 4π), and its breadth-first layers from the boundary — the same rules as the
-// encoder's decimation (libhmc/src/hierarchy), recomputed here so that every
+// encoder's decimation (libhmc/src/encoder/hierarchy), recomputed here so that every
 // level, the coarsest too and the levels of a stream, has them.
 struct VolumeLayers {
   std::vector<std::uint64_t> layers;  // L0 (boundary by faces; and points of no tetrahedron), L1, ...

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 // The boundary of a set of tetrahedra as the faces that only one of them
-// has: shared by the encoder's input boundary (reconstruct/winding) and the
+// has: shared by the encoder's input boundary (encoder/winding) and the
 // hierarchy's boundary classification.
 #pragma once
 

@@ -2,8 +2,8 @@
 // Vertex graph of a level and the initial labelling (components).
 #include <algorithm>
 
-#include "hierarchy/hierarchy.hpp"
-#include "hierarchy/internal.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
+#include "encoder/hierarchy/internal.hpp"
 
 namespace hmc::detail {
 

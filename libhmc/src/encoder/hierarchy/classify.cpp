@@ -5,8 +5,8 @@
 
 #include "delaunay/delaunay.hpp"
 #include "delaunay/predicates.hpp"
-#include "hierarchy/hierarchy.hpp"
-#include "hierarchy/internal.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
+#include "encoder/hierarchy/internal.hpp"
 #include "util/error.hpp"
 #include "util/single_faces.hpp"
 

@@ -6,8 +6,8 @@
 #include <numeric>
 
 #include "delaunay/predicates.hpp"
-#include "hierarchy/hierarchy.hpp"
-#include "hierarchy/internal.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
+#include "encoder/hierarchy/internal.hpp"
 
 namespace hmc::detail {
 

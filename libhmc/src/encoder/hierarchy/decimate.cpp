@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "hierarchy/hierarchy.hpp"
-#include "hierarchy/internal.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
+#include "encoder/hierarchy/internal.hpp"
 
 namespace hmc::detail {
 

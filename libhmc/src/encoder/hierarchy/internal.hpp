@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "hierarchy/hierarchy.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
 
 namespace hmc::detail::hierarchy {
 

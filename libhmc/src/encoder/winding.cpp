@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "reconstruct/winding.hpp"
+#include "encoder/winding.hpp"
 
 #include <algorithm>
 #include <climits>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "reconstruct/distance.hpp"
+#include "encoder/distance.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -3,8 +3,8 @@
 // (thesis §3.4.2; rules in hierarchy.hpp).
 #include <algorithm>
 
-#include "hierarchy/hierarchy.hpp"
-#include "hierarchy/internal.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
+#include "encoder/hierarchy/internal.hpp"
 
 namespace hmc::detail {
 

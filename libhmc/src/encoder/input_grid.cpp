@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "codec/input_grid.hpp"
+#include "encoder/input_grid.hpp"
 
 #include <algorithm>
 
-#include "reconstruct/winding.hpp"
+#include "encoder/winding.hpp"
 
 namespace hmc::detail {
 

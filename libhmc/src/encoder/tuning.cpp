@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
-#include "reconstruct/tuning.hpp"
+#include "encoder/tuning.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include <set>
 
 #include "entropy/rice.hpp"
-#include "reconstruct/distance.hpp"
-#include "reconstruct/winding.hpp"
+#include "encoder/distance.hpp"
+#include "encoder/winding.hpp"
 #include "util/morton.hpp"
 #include "util/radix_sort.hpp"
 

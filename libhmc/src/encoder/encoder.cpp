@@ -7,13 +7,13 @@
 #include <unordered_map>
 
 #include "codec/format.hpp"
-#include "codec/input_grid.hpp"
-#include "hierarchy/hierarchy.hpp"
+#include "encoder/input_grid.hpp"
+#include "encoder/hierarchy/hierarchy.hpp"
 #include "pointset/refine.hpp"
 #include "pointset/anchored_vq.hpp"
 #include "delaunay/delaunay.hpp"
-#include "reconstruct/tuning.hpp"
-#include "reconstruct/winding.hpp"
+#include "encoder/tuning.hpp"
+#include "encoder/winding.hpp"
 #include "pointset/octree.hpp"
 #include "quant/scalar_quantizer.hpp"
 #include "util/bytes.hpp"
