@@ -23,12 +23,6 @@ void system_free(void*, void* p) { std::free(p); }
 // rather than kept for the next one.
 constexpr std::size_t kKeepBuffer = std::size_t{1} << 20;
 
-bool is_letter(char ch) { return (ch >= 'A' && ch <= 'Z') || (ch >= 'a' && ch <= 'z'); }
-
-std::uint32_t load_u32(const std::uint8_t* p) {
-  return std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 | std::uint32_t{p[2]} << 16 | std::uint32_t{p[3]} << 24;
-}
-
 }  // namespace
 
 RawAllocator RawAllocator::system() {
@@ -60,7 +54,7 @@ void StreamDecoder::reserve(std::size_t n) {
   // arrived: a header may declare 2 GiB that never come.
   std::size_t cap = body_cap_ ? body_cap_ : 256;
   while (cap < n) cap = cap > (SIZE_MAX >> 1) ? n : cap * 2;
-  const std::size_t whole = std::size_t{length_} + 4;
+  const std::size_t whole = std::size_t{header_.length} + 4;
   if (cap > whole) cap = whole;
   void* p = body_ ? alloc_.realloc_fn(alloc_.user, body_, cap) : alloc_.malloc_fn(alloc_.user, cap);
   if (!p) throw std::bad_alloc();
@@ -86,7 +80,7 @@ Status StreamDecoder::finish() noexcept {
   error_ = guarded<Error>([&] {
     if (held_) {
       if (held_after_end_)
-        held_->message = std::to_string(fed_ - end_offset_) + " byte(s) follow the end chunk " + to_string(kEnd);
+        held_->message = after_end(fed_ - end_offset_, kEnd);
       return *held_;
     }
     chunks_.finish(tail());
@@ -102,20 +96,17 @@ ContainerView StreamDecoder::tail() const {
   switch (stage_) {
     case Stage::preamble:
       v.truncated = true;
-      v.truncation = fed_ == 0 ? std::string("the stream is empty")
-                               : "the stream ends inside the signature or version (" + std::to_string(fed_) + " bytes)";
+      v.truncation = cut_in_preamble(fed_);
       break;
     case Stage::chunk_header:
       if (head_len_ > 0) {
         v.truncated = true;
-        v.truncation = "the stream ends inside a chunk header at offset " + std::to_string(chunk_offset_);
+        v.truncation = cut_in_chunk_header(chunk_offset_);
       }
       break;
     case Stage::chunk_body:
       v.truncated = true;
-      v.truncation = "the stream ends inside chunk " + to_string(type_) + " at offset " + std::to_string(chunk_offset_) +
-                     " (" + std::to_string(length_) + "-byte payload declared, " + std::to_string(body_len_) +
-                     " bytes left)";
+      v.truncation = cut_in_chunk(header_, chunk_offset_, body_len_);
       break;
     case Stage::ended:
     case Stage::skip: break;
@@ -124,17 +115,13 @@ ContainerView StreamDecoder::tail() const {
   return v;
 }
 
-void StreamDecoder::complete_chunk(const ChunkType& type, std::uint32_t length, const std::uint8_t* body) {
-  const std::uint32_t stored = load_u32(body + length);
-  const std::uint32_t actual = chunk_crc(type, body, length);
-  if (stored != actual)
-    fail(Status::crc_mismatch, "chunk " + to_string(type) + " at offset " + std::to_string(chunk_offset_) +
-                                   ": CRC-32 mismatch (stored " + std::to_string(stored) + ", computed " +
-                                   std::to_string(actual) + ")");
+void StreamDecoder::complete_chunk(const std::uint8_t* body) {
+  check_chunk_crc(header_, body, chunk_offset_);
+  const ChunkType type = header_.type;
   ChunkView c;
   c.type = type;
   c.offset = static_cast<std::size_t>(chunk_offset_);
-  c.length = length;
+  c.length = header_.length;
   c.payload = body;
   if (order_ == ErrorOrder::stream) {
     chunks_.chunk(c);
@@ -145,7 +132,7 @@ void StreamDecoder::complete_chunk(const ChunkType& type, std::uint32_t length, 
       held_ = e.error();
     }
   }
-  if (type == kEnd) end_offset_ = chunk_offset_ + kChunkOverhead + length;
+  if (type == kEnd) end_offset_ = chunk_offset_ + kChunkOverhead + header_.length;
   stage_ = type == kEnd ? Stage::ended : Stage::chunk_header;
   head_len_ = 0;
   body_len_ = 0;
@@ -180,15 +167,9 @@ void StreamDecoder::parse(const std::uint8_t* p, std::size_t n) {
         std::memcpy(head_ + head_len_, p, take);
         head_len_ += take;
         p += take, n -= take, fed_ += take;
-        const std::size_t sig = sizeof kSignature;
-        if (std::memcmp(head_, kSignature, head_len_ < sig ? head_len_ : sig) != 0)
-          fail(Status::bad_magic, "the first bytes are not the HMC signature 89 48 4D 43 0D 0A 1A 0A");
+        check_preamble(head_, head_len_);
         if (head_len_ < kPreambleSize) break;
-        const std::uint8_t major = head_[8], minor = head_[9];
-        if (major != kVersionMajor)
-          fail(Status::unsupported_version, "stream version " + std::to_string(major) + "." + std::to_string(minor) +
-                                                "; this decoder reads major version " + std::to_string(kVersionMajor));
-        chunks_.set_version(major, minor);
+        chunks_.set_version(head_[8], head_[9]);
         stage_ = Stage::chunk_header;
         head_len_ = 0;
         break;
@@ -200,38 +181,29 @@ void StreamDecoder::parse(const std::uint8_t* p, std::size_t n) {
         head_len_ += take;
         p += take, n -= take, fed_ += take;
         if (head_len_ < 8) break;
-        std::memcpy(type_.data(), head_, 4);
-        for (char ch : type_)
-          if (!is_letter(ch))
-            fail(Status::bad_chunk, "chunk at offset " + std::to_string(chunk_offset_) +
-                                        " has a type that is not four ASCII letters");
-        length_ = load_u32(head_ + 4);
-        if (length_ > kMaxChunkLength)
-          fail(Status::bad_chunk, "chunk " + to_string(type_) + " at offset " + std::to_string(chunk_offset_) +
-                                      " declares length " + std::to_string(length_) + ", over the maximum 2^31-1");
+        header_ = read_chunk_header(head_, chunk_offset_);
         stage_ = Stage::chunk_body;
         body_len_ = 0;
-        const std::size_t whole = std::size_t{length_} + 4;
+        const std::size_t whole = std::size_t{header_.length} + 4;
         if (n >= whole) {  // the whole chunk is in this piece: decode it in place
           p += whole, n -= whole, fed_ += whole;
-          complete_chunk(type_, length_, p - whole);
+          complete_chunk(p - whole);
         }
         break;
       }
       case Stage::chunk_body: {
-        const std::size_t whole = std::size_t{length_} + 4;
+        const std::size_t whole = std::size_t{header_.length} + 4;
         const std::size_t take = std::min(n, whole - body_len_);
         reserve(body_len_ + take);
         std::memcpy(body_ + body_len_, p, take);
         body_len_ += take;
         p += take, n -= take, fed_ += take;
         if (body_len_ < whole) break;
-        complete_chunk(type_, length_, body_);
+        complete_chunk(body_);
         if (body_cap_ > kKeepBuffer) release();
         break;
       }
-      case Stage::ended:
-        fail(Status::bad_chunk, std::to_string(n) + " byte(s) follow the end chunk " + to_string(kEnd));
+      case Stage::ended: fail_after_end(n, kEnd);
       case Stage::skip: return;
     }
   }

@@ -7,9 +7,10 @@
 // their last byte arrives. Both therefore apply the same order rules, the
 // same layer and reconstruction code and the same truncation rules.
 //
-// StreamDecoder does the container framing itself, incrementally: it keeps
-// only the chunk being received, checks each chunk's CRC once it is
-// complete, and hands it to the ChunkDecoder. A level is reported as soon as
+// StreamDecoder receives the container incrementally: it keeps only the
+// chunk being received, checks each chunk's CRC once it is complete (with
+// the framing checks of container/, shared with parse_container), and hands
+// it to the ChunkDecoder. A level is reported as soon as
 // the chunk that completes it (its layer chunk, or for surfaces and volumes
 // its RCON) has arrived.
 //
@@ -146,7 +147,7 @@ class StreamDecoder {
   enum class Stage { preamble, chunk_header, chunk_body, ended, skip };
   void consume(const std::uint8_t* data, std::size_t size);  // raises StreamError
   void parse(const std::uint8_t* data, std::size_t size);    // raises StreamError
-  void complete_chunk(const ChunkType& type, std::uint32_t length, const std::uint8_t* body);
+  void complete_chunk(const std::uint8_t* body);
   void reserve(std::size_t n);
   void release() noexcept;
   ContainerView tail() const;
@@ -165,8 +166,7 @@ class StreamDecoder {
   std::uint64_t chunk_offset_ = 0;   // stream offset of the chunk being received
   std::uint8_t head_[kPreambleSize > 8 ? kPreambleSize : 8] = {};  // preamble or chunk header bytes
   std::size_t head_len_ = 0;
-  ChunkType type_{};
-  std::uint32_t length_ = 0;         // payload length of the chunk being received
+  ChunkHeader header_{};            // type and payload length of the chunk being received
   std::uint8_t* body_ = nullptr;     // payload + CRC of the chunk being received
   std::size_t body_len_ = 0, body_cap_ = 0;
 };

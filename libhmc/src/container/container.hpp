@@ -4,7 +4,7 @@
 // type and payload). A chunk whose type starts with an upper-case letter is
 // critical; lower-case is ancillary and may be skipped by a decoder that
 // does not know it. This layer checks framing and CRCs only; which chunks
-// may appear where is the codec's business (codec/stream_format.hpp).
+// may appear where is the codec's business (codec/format.hpp).
 #pragma once
 
 #include <array>
@@ -55,6 +55,35 @@ struct ContainerView {
   bool truncated = false;         ///< the data ends inside a chunk (or before the first one)
   std::string truncation;         ///< where and how, when truncated
 };
+
+// The framing checks, one place for both readers of the container: the
+// whole-buffer parse_container() below and the streaming decoder
+// (codec/stream_decoder.cpp), which receives the same bytes in pieces. Each
+// raises the spec's error with the same message for the same defect.
+
+/// The first `n` bytes (n <= kPreambleSize) of a stream: bad_magic when they
+/// are not a prefix of the signature; once all kPreambleSize bytes are
+/// there, unsupported_version for a major version this decoder does not read.
+void check_preamble(const std::uint8_t* head, std::size_t n);
+
+struct ChunkHeader {
+  ChunkType type{};
+  std::uint32_t length = 0;
+};
+/// The 8 bytes of a chunk header at stream offset `offset`: bad_chunk for
+/// type bytes that are not four ASCII letters or a length over 2^31-1.
+ChunkHeader read_chunk_header(const std::uint8_t* h, std::uint64_t offset);
+/// crc_mismatch unless the 4 bytes after `length` bytes of `payload` hold
+/// the CRC-32 of `type` and the payload.
+void check_chunk_crc(const ChunkHeader& c, const std::uint8_t* payload, std::uint64_t offset);
+/// The bad_chunk raised for `n` bytes after the end chunk `end`, and its message.
+[[noreturn]] void fail_after_end(std::uint64_t n, const ChunkType& end);
+std::string after_end(std::uint64_t n, const ChunkType& end);
+
+/// How a cut stream ends, in the words both readers report.
+std::string cut_in_preamble(std::uint64_t n);
+std::string cut_in_chunk_header(std::uint64_t offset);
+std::string cut_in_chunk(const ChunkHeader& c, std::uint64_t offset, std::uint64_t left);
 
 /// Parse the framing of `size` bytes. Raises bad_magic, unsupported_version,
 /// bad_chunk (invalid type bytes, length over 2^31-1) and crc_mismatch.
