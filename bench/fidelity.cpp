@@ -4,13 +4,16 @@
 // connectivity with the input's own. Prints one JSON object.
 //
 // usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact]
-//                       [--levels L] [--vq-bits B] [--vq-residual S]
+//                       [--levels L] [--vq-bits B] [--vq-residual S] [--per-level] [--fit-coarse]
 //
 // With --levels or --vq-bits (issue 7, lossy streams) the model goes through
 // the public encoder and decoder instead, with L levels (2 by default) and
 // the refinement layers coded by the anchored vector quantizer with 2^B
 // entries (B = 0: exact). Lossy points are not the input's, so the report
 // compares geometry and topology, not vertex identity: see stream_report().
+// --per-level adds every decoded level's Hausdorff distance to the input
+// surface (a volume's boundary), its topology and its side bytes;
+// --fit-coarse encodes with EncodeOptions::fit_coarse_levels.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -142,8 +145,9 @@ std::vector<Vec3> to_vec3(const std::vector<GridPoint>& g) {
 //    simplices, not of the Delaunay ceiling);
 //  - whether the decoder rebuilt exactly what the encoder predicted.
 int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int levels, int vq_bits,
-                  std::uint32_t vq_residual) {
+                  std::uint32_t vq_residual, bool per_level, bool fit_coarse) {
   EncodeOptions opt;
+  opt.fit_coarse_levels = fit_coarse;
   opt.bits = q;
   opt.fidelity = fidelity;
   opt.levels = levels;
@@ -282,6 +286,42 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
     std::printf(", ");
     topo_json("output_boundary_topology", topology(out_bd));
   }
+  if (per_level) {
+    // Every decoded level against the input surface (a volume's boundary):
+    // symmetric Hausdorff, sampled as above, and the level's topology.
+    const std::vector<Face> in_surface = kind == Kind::surface ? in_tris : boundary_faces(in_gp, in_tets);
+    const SurfaceDistance to_in(in_gp, in_surface);
+    std::printf(", \"per_level\": [");
+    const auto& dl = dec.value().levels;
+    for (std::size_t i = 0; i < dl.size(); ++i) {
+      const int lod = static_cast<int>(dl.size() - 1 - i);
+      const LevelReport* lr = nullptr;
+      for (const auto& l : e.report.levels)
+        if (l.lod == lod) lr = &l;
+      const std::vector<Vec3> lp = to_vec3(dl[i].points);
+      std::vector<Face> surf;
+      if (kind == Kind::surface)
+        surf.assign(dl[i].triangles.begin(), dl[i].triangles.end());
+      else
+        surf = boundary_faces(lp, std::vector<Tetrahedron>(dl[i].tetrahedra.begin(), dl[i].tetrahedra.end()));
+      double h_out = 0, h_in = 0;
+      if (!surf.empty()) {
+        const SurfaceDistance to_level(lp, surf);
+        h_out = one_sided(lp, surf, to_in);
+        h_in = one_sided(in_gp, in_surface, to_level);
+      }
+      std::printf("%s{\"lod\": %d, \"points\": %zu, \"points_pct\": %.2f, \"stream_bytes\": %llu, "
+                  "\"side_bytes\": %llu, \"hausdorff_out_to_in_pct\": %.4f, \"hausdorff_in_to_out_pct\": %.4f, "
+                  "\"hausdorff_pct_diag\": %.4f, ",
+                  i ? ", " : "", lod, dl[i].points.size(), pct(dl[i].points.size(), in_pts.size()),
+                  static_cast<unsigned long long>(lr ? lr->stream_bytes : 0),
+                  static_cast<unsigned long long>(lr ? lr->side_bytes : 0), 100 * h_out / diag, 100 * h_in / diag,
+                  surf.empty() ? 100.0 : 100 * std::max(h_out, h_in) / diag);
+      topo_json("topology", topology(surf));
+      std::printf("}");
+    }
+    std::printf("]");
+  }
   std::printf("}\n");
   return 0;
 }
@@ -291,17 +331,20 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact] [--levels L] [--vq-bits B] "
-                         "[--vq-residual S]\n");
+                         "[--vq-residual S] [--per-level] [--fit-coarse]\n");
     return 1;
   }
   int q = 12, levels = 0, vq_bits = -1;
   long vq_residual = 0;
+  bool per_level = false, fit_coarse = false;
   Fidelity fidelity = Fidelity::shape;
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--bits") && i + 1 < argc) q = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--levels") && i + 1 < argc) levels = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--vq-bits") && i + 1 < argc) vq_bits = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--vq-residual") && i + 1 < argc) vq_residual = std::atol(argv[++i]);
+    if (!std::strcmp(argv[i], "--per-level")) per_level = true;
+    if (!std::strcmp(argv[i], "--fit-coarse")) fit_coarse = true;
     if (!std::strcmp(argv[i], "--fidelity") && i + 1 < argc) {
       const std::string f = argv[++i];
       fidelity = f == "rule" ? Fidelity::rule : f == "exact" ? Fidelity::exact : f == "topology" ? Fidelity::topology : Fidelity::shape;
@@ -315,7 +358,7 @@ int main(int argc, char** argv) {
   const Mesh& m = mesh.value();
   if (levels > 0 || vq_bits >= 0)
     return stream_report(argv[1], m, q, fidelity, levels > 0 ? levels : 2, std::max(vq_bits, 0),
-                         static_cast<std::uint32_t>(std::max(vq_residual, 0L)));
+                         static_cast<std::uint32_t>(std::max(vq_residual, 0L)), per_level, fit_coarse);
   const Kind kind = m.tetrahedra.empty() ? Kind::surface : Kind::volume;
   const auto sq = fit_quantizer(m.points, q);
   const auto g = quantize(m.points, sq);

@@ -4,6 +4,8 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <set>
 
 #include "codec/format.hpp"
@@ -318,4 +320,66 @@ TEST_CASE("fast_decode: plain octrees without neighbours, the same levels, a lar
   REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
   CHECK(d.value().finest().points == e.points);
   CHECK(d.value().finest().triangles == small.value().levels.back().triangles);
+}
+
+TEST_CASE("fit_coarse_levels: coarser levels of a torus stay on it, one closed piece of genus 1") {
+  // samples::torus(60, 24): major radius 1, minor 0.35. A point's distance
+  // to the torus is | |(rho - 1, z)| - 0.35 |, rho its distance to the z axis.
+  const Mesh m = samples::torus(60, 24);
+  auto off_torus = [](const Vec3& p) {
+    const double rho = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+    return std::abs(std::hypot(rho - 1.0, p[2]) - 0.35);
+  };
+  EncodeOptions opt;
+  opt.levels = 4;
+  opt.removal_ratio = 0.5;
+  auto plain = encode(m, opt);
+  opt.fit_coarse_levels = true;
+  auto fit = encode(m, opt);
+  REQUIRE_MESSAGE(plain.ok(), hmc::testgen::why(plain));
+  REQUIRE_MESSAGE(fit.ok(), hmc::testgen::why(fit));
+  const Encoded& e = fit.value();
+  auto d = decode(e.bytes.data(), e.bytes.size());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
+  REQUIRE(d.value().levels.size() == e.levels.size());
+  REQUIRE(e.levels.size() == 4);
+  // Worst distance from the torus of a level's vertices, edge midpoints and
+  // triangle centroids (input units), and its topology.
+  auto measure = [&](const DecodedLevel& l, const ScalarQuantizer& sq, double& worst, long& euler,
+                     std::size_t& bad_edges) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+    std::set<std::uint32_t> verts;
+    worst = 0;
+    for (const auto& t : l.triangles) {
+      Vec3 c{0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 a = sq.dequantize(l.points[t[k]]), b = sq.dequantize(l.points[t[(k + 1) % 3]]);
+        worst = std::max({worst, off_torus(a), off_torus({(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2})});
+        for (int ax = 0; ax < 3; ++ax) c[ax] += a[ax] / 3;
+        ++edges[{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}];
+        verts.insert(t[k]);
+      }
+      worst = std::max(worst, off_torus(c));
+    }
+    bad_edges = 0;
+    for (const auto& [edge, n] : edges) bad_edges += n != 2;
+    euler = static_cast<long>(verts.size()) - static_cast<long>(edges.size()) + static_cast<long>(l.triangles.size());
+  };
+  for (std::size_t i = 0; i + 1 < e.levels.size(); ++i) {
+    CAPTURE(i);
+    const DecodedLevel& l = d.value().levels[i];
+    CHECK(l.points == e.levels[i].points);
+    CHECK(l.triangles == e.levels[i].triangles);
+    double worst = 0, worst_plain = 0;
+    long euler = 0, euler_plain = 0;
+    std::size_t bad = 0, bad_plain = 0;
+    measure(l, e.report.quantizer, worst, euler, bad);
+    measure(plain.value().levels[i], plain.value().report.quantizer, worst_plain, euler_plain, bad_plain);
+    MESSAGE("level ", l.lod, ": ", l.points.size(), " points, off the torus by at most ", worst, " (",
+            worst_plain, " without fitting), Euler ", euler, " (", euler_plain, ")");
+    CHECK(worst < 0.04);  // about 1 % of the bounding-box diagonal (3.9)
+    CHECK(euler == 0);
+    CHECK(bad == 0);
+    CHECK(l.points.size() < m.points.size());
+  }
 }

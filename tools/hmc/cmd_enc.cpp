@@ -27,7 +27,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 }  // namespace
 
 int cmd_enc(int argc, char** argv) {
-  Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode"},
+  Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode", "--fit-coarse"},
          {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio",
           "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads"});
   EncodeOptions opt;
@@ -40,6 +40,7 @@ int cmd_enc(int argc, char** argv) {
   }
   opt.write_info = !a.flag("--no-info");
   opt.fast_decode = a.flag("--fast-decode");
+  opt.fit_coarse_levels = a.flag("--fit-coarse");
   opt.threads = threads_option(a);
   opt.levels = static_cast<int>(a.get_int("--levels", 1, 1, 64));
   opt.vq_bits = static_cast<int>(a.get_int("--vq-bits", 0, 0, 10));
@@ -88,7 +89,7 @@ int cmd_enc(int argc, char** argv) {
     std::fprintf(stderr,
                  "hmc enc: %s\n"
                  "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R]\n"
-                 "                  [--boundary M] [--optimizer O] [--fidelity F] [--vq-bits B [--vq-residual S]]\n"
+                 "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse] [--vq-bits B [--vq-residual S]]\n"
                  "                  [--fast-decode] [--canonical DIR] [--no-info] [--threads N] [--json]\n"
                  "                  (hmc --help says what each does)\n",
                  a.ok() ? "need one input file and -o OUT.hmc" : a.error().c_str());

@@ -42,6 +42,8 @@ const char* kUsage =
     "      --boundary M        constant | linear | adaptive Dmax (default linear)\n"
     "      --optimizer O       forward | backward | greedy | best, for volume interiors (default best)\n"
     "      --fidelity F        rule | topology | shape | exact reconstruction side information (default shape)\n"
+    "      --fit-coarse        coarser levels follow the input surface too (with --fidelity's corrections):\n"
+    "                          previews that look like the model, for about 12 % more bytes\n"
     "      --vq-bits B         lossy refinement layers: 2^B trained displacement vectors, B = 1..10\n"
     "                          (default 0: exact); the base level stays exact; needs --levels >= 2\n"
     "      --vq-residual S     with --vq-bits: add a residual of step S (every coordinate within S/2;\n"

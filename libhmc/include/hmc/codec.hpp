@@ -104,6 +104,15 @@ struct EncodeOptions {
   bool write_info = true;
   /// Reconstruction side information (surface and volume kinds).
   Fidelity fidelity = Fidelity::shape;
+  /// Coarser levels (all but the finest) follow the input surface as the
+  /// finest level does, with `fidelity`'s corrections and the input's
+  /// topology as the target, instead of keeping the decoder's rule and
+  /// repair. They then look like the model: on the 13 shared models at 4
+  /// levels, Hausdorff distance to the input 0.1-1.5 % of the diagonal
+  /// instead of 3-20 %, for 0.3-18 % more bytes (geometric mean 11.6 %,
+  /// bench/results/coarse_levels.md); off by default. No effect with
+  /// Fidelity::rule or Fidelity::exact (exact already corrects every label).
+  bool fit_coarse_levels = false;
   /// Levels of detail, 1..64. Level 0 is the input; each coarser level
   /// removes an independent set of the finer level's vertices. Fewer levels
   /// are written when a level has nothing left to remove.

@@ -118,11 +118,13 @@ struct LossyTarget {
 // faces over to the decoded points and tunes against that surface just as
 // for an exact level. Coarser levels only approximate the input: unless the
 // fidelity is exact, they keep the rule's labels and let the decoder's
-// repair mend what makes the surface unsound.
+// repair mend what makes the surface unsound; with fit_coarse_levels they
+// follow the input as the finest level does, aiming at its topology.
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
-                         Fidelity fidelity, const LevelPlan* finest, const LossyTarget* lossy = nullptr,
+                         const EncodeOptions& options, const LevelPlan* finest, const LossyTarget* lossy = nullptr,
                          WindingCache* winding = nullptr, HelperBudget* helpers = nullptr) {
+  const Fidelity fidelity = options.fidelity;
   const bool coarser = finest != nullptr;
   const auto idx = lossy ? lossy->index : index_in(fine_points, plan.points);
   const std::vector<Vec3>& surface_gp = lossy ? lossy->positions : fine_gp;
@@ -147,8 +149,9 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.surface_points = &surface_gp;
   ti.surface = &surface;
   ti.helpers = helpers;
-  // Coarser levels only approximate the input; exact fidelity still follows it.
-  ti.approximate = coarser && fidelity != Fidelity::exact;
+  // Coarser levels only approximate the input; exact fidelity still follows
+  // it, and so does any fidelity but the rule's when asked to fit them.
+  ti.approximate = coarser && fidelity != Fidelity::exact && !(options.fit_coarse_levels && fidelity != Fidelity::rule);
   const bool closed = kind == Kind::volume || fine.border.empty();
   if (!ti.approximate && (lossy || ((fidelity == Fidelity::shape || fidelity == Fidelity::topology) && closed))) {
     // The target can be unsound (a lossy level's carried surface folds where
@@ -161,7 +164,9 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
     // holes than it closes (the bunny: 41 more border edges).
     ti.clean_target = true;
     if (closed) {
-      const auto [components, euler] = surface_topology(faces);
+      // A fitted coarser level aims at the whole input's topology: the input
+      // faces whose vertices all survive on it are only a patchwork.
+      const auto [components, euler] = surface_topology(coarser && options.fit_coarse_levels ? surface : faces);
       ti.target_components = components;
       ti.target_euler = euler;
     }
@@ -332,7 +337,7 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
       if (a != b && b != c && a != c) target.surface.push_back(t);
     }
     const Tetrahedralization dt = delaunay(plan.points);
-    plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options.fidelity, i > 0 ? &plans.front() : nullptr,
+    plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options, i > 0 ? &plans.front() : nullptr,
                         &target);
     lr.simplices = kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
   }
@@ -450,7 +455,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     Tetrahedralization dt;
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
     if (rep.kind != Kind::points)
-      plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options.fidelity,
+      plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options,
                           k > 0 ? &plans.front() : nullptr, nullptr, &winding, &helpers);
     if (more) {
       LevelMesh mesh;
