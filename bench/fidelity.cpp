@@ -5,6 +5,7 @@
 //
 // usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact]
 //                       [--levels L] [--vq-bits B] [--vq-residual S] [--per-level] [--fit-coarse]
+//                       [--preview R]
 //
 // With --levels or --vq-bits (issue 7, lossy streams) the model goes through
 // the public encoder and decoder instead, with L levels (2 by default) and
@@ -13,7 +14,8 @@
 // compares geometry and topology, not vertex identity: see stream_report().
 // --per-level adds every decoded level's Hausdorff distance to the input
 // surface (a volume's boundary), its topology and its side bytes;
-// --fit-coarse encodes with EncodeOptions::fit_coarse_levels.
+// --fit-coarse encodes with EncodeOptions::fit_coarse_levels, --preview R with
+// EncodeOptions::preview_ratio = R (levels of octree cells below the L levels).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -145,9 +147,10 @@ std::vector<Vec3> to_vec3(const std::vector<GridPoint>& g) {
 //    simplices, not of the Delaunay ceiling);
 //  - whether the decoder rebuilt exactly what the encoder predicted.
 int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int levels, int vq_bits,
-                  std::uint32_t vq_residual, bool per_level, bool fit_coarse) {
+                  std::uint32_t vq_residual, bool per_level, bool fit_coarse, double preview) {
   EncodeOptions opt;
   opt.fit_coarse_levels = fit_coarse;
+  opt.preview_ratio = preview;
   opt.bits = q;
   opt.fidelity = fidelity;
   opt.levels = levels;
@@ -331,12 +334,13 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact] [--levels L] [--vq-bits B] "
-                         "[--vq-residual S] [--per-level] [--fit-coarse]\n");
+                         "[--vq-residual S] [--per-level] [--fit-coarse] [--preview R]\n");
     return 1;
   }
   int q = 12, levels = 0, vq_bits = -1;
   long vq_residual = 0;
   bool per_level = false, fit_coarse = false;
+  double preview = 0;
   Fidelity fidelity = Fidelity::shape;
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--bits") && i + 1 < argc) q = std::atoi(argv[++i]);
@@ -345,6 +349,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--vq-residual") && i + 1 < argc) vq_residual = std::atol(argv[++i]);
     if (!std::strcmp(argv[i], "--per-level")) per_level = true;
     if (!std::strcmp(argv[i], "--fit-coarse")) fit_coarse = true;
+    if (!std::strcmp(argv[i], "--preview") && i + 1 < argc) preview = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--fidelity") && i + 1 < argc) {
       const std::string f = argv[++i];
       fidelity = f == "rule" ? Fidelity::rule : f == "exact" ? Fidelity::exact : f == "topology" ? Fidelity::topology : Fidelity::shape;
@@ -358,7 +363,7 @@ int main(int argc, char** argv) {
   const Mesh& m = mesh.value();
   if (levels > 0 || vq_bits >= 0)
     return stream_report(argv[1], m, q, fidelity, levels > 0 ? levels : 2, std::max(vq_bits, 0),
-                         static_cast<std::uint32_t>(std::max(vq_residual, 0L)), per_level, fit_coarse);
+                         static_cast<std::uint32_t>(std::max(vq_residual, 0L)), per_level, fit_coarse, preview);
   const Kind kind = m.tetrahedra.empty() ? Kind::surface : Kind::volume;
   const auto sq = fit_quantizer(m.points, q);
   const auto g = quantize(m.points, sq);

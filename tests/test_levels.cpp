@@ -11,6 +11,7 @@
 #include "codec/format.hpp"
 #include "container/container.hpp"
 #include "delaunay/delaunay.hpp"
+#include "util/morton.hpp"
 #include "hmc/codec.hpp"
 #include "samples.hpp"
 #include "support/why.hpp"
@@ -382,4 +383,68 @@ TEST_CASE("fit_coarse_levels: coarser levels of a torus stay on it, one closed p
     CHECK(bad == 0);
     CHECK(l.points.size() < m.points.size());
   }
+}
+
+TEST_CASE("preview_ratio: levels of octree cells below the independent-set levels, down to a few percent") {
+  const Mesh m = samples::torus(120, 48);  // 5,760 points
+  EncodeOptions opt;
+  opt.levels = 2;
+  opt.preview_ratio = 0.03;
+  auto enc = encode(m, opt);
+  REQUIRE_MESSAGE(enc.ok(), hmc::testgen::why(enc));
+  const Encoded& e = enc.value();
+  const int q = e.report.quantizer.bits;
+  auto d = decode(e.bytes.data(), e.bytes.size());
+  REQUIRE_MESSAGE(d.ok(), hmc::testgen::why(d));
+  const auto& levels = d.value().levels;  // coarsest first
+  REQUIRE(levels.size() == e.levels.size());
+  REQUIRE(levels.size() >= 4);
+  const std::size_t n = levels.back().points.size();
+  MESSAGE(levels.size(), " levels, the coarsest ", levels.front().points.size(), " of ", n, " points");
+  CHECK(static_cast<double>(levels.front().points.size()) <= 0.03 * static_cast<double>(n));
+  CHECK(levels.front().points.size() >= 5);
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    CAPTURE(i);
+    CHECK(levels[i].points == e.levels[i].points);
+    CHECK(levels[i].triangles == e.levels[i].triangles);
+    CHECK(!levels[i].triangles.empty());
+  }
+  // Level 0 and 1 come from the independent sets; every coarser level keeps
+  // one point per occupied cell of some octree depth D of the next finer
+  // level, at most half of its points: the point nearest the cell's centre
+  // (first in canonical order on ties).
+  for (std::size_t i = 0; i + 2 < levels.size(); ++i) {
+    CAPTURE(i);
+    const auto& coarse = levels[i].points;
+    const auto& finer = levels[i + 1].points;
+    CHECK(2 * coarse.size() <= finer.size());
+    CHECK(std::includes(finer.begin(), finer.end(), coarse.begin(), coarse.end()));
+    int depth = -1;
+    for (int dd = 0; dd <= q && depth < 0; ++dd) {
+      std::set<std::uint64_t> cells;
+      for (const auto& p : finer) cells.insert(morton_key(p, q) >> (3 * (q - dd)));
+      if (cells.size() == coarse.size()) depth = dd;
+    }
+    REQUIRE(depth > 0);
+    const int shift = q - depth;
+    std::map<std::uint64_t, std::pair<std::int64_t, GridPoint>> nearest;
+    for (const auto& p : finer) {
+      std::int64_t dist = 0;
+      for (int a = 0; a < 3; ++a) {
+        const std::int64_t c = ((std::int64_t{p[a]} >> shift) << shift) * 2 + (std::int64_t{1} << shift);
+        dist += (2 * std::int64_t{p[a]} - c) * (2 * std::int64_t{p[a]} - c);
+      }
+      const std::uint64_t cell = morton_key(p, q) >> (3 * shift);
+      auto it = nearest.find(cell);
+      if (it == nearest.end() || dist < it->second.first) nearest[cell] = {dist, p};
+    }
+    std::vector<GridPoint> expected;
+    for (const auto& [cell, best] : nearest) expected.push_back(best.second);
+    std::sort(expected.begin(), expected.end());
+    CHECK(expected == coarse);
+  }
+  opt.preview_ratio = 1;
+  CHECK(encode(m, opt).status() == Status::invalid_argument);
+  opt.preview_ratio = -0.5;
+  CHECK(encode(m, opt).status() == Status::invalid_argument);
 }

@@ -28,7 +28,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode", "--fit-coarse"},
-         {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio",
+         {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio", "--preview",
           "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
@@ -62,6 +62,15 @@ int cmd_enc(int argc, char** argv) {
       return kUsage;
     }
   }
+  if (a.has("--preview")) {
+    char* end = nullptr;
+    const std::string r = a.get("--preview");
+    opt.preview_ratio = std::strtod(r.c_str(), &end);
+    if (end == r.c_str() || *end || !(opt.preview_ratio >= 0 && opt.preview_ratio < 1)) {
+      std::fprintf(stderr, "hmc enc: --preview must be a number in [0, 1), got '%s'\n", r.c_str());
+      return kUsage;
+    }
+  }
   const std::string bm = a.get("--boundary", "linear");
   if (bm == "constant") opt.boundary_mode = BoundaryMode::constant;
   else if (bm == "linear") opt.boundary_mode = BoundaryMode::linear;
@@ -88,7 +97,7 @@ int cmd_enc(int argc, char** argv) {
   if (!a.ok() || a.positional().size() != 1 || (out.empty() && !a.has("--canonical"))) {
     std::fprintf(stderr,
                  "hmc enc: %s\n"
-                 "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R]\n"
+                 "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--preview R]\n"
                  "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse] [--vq-bits B [--vq-residual S]]\n"
                  "                  [--fast-decode] [--canonical DIR] [--no-info] [--threads N] [--json]\n"
                  "                  (hmc --help says what each does)\n",

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <future>
 #include <map>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -20,6 +21,7 @@
 #include "util/error.hpp"
 #include "util/helpers.hpp"
 #include "util/kdtree.hpp"
+#include "util/morton.hpp"
 
 namespace hmc {
 
@@ -118,11 +120,13 @@ struct LossyTarget {
 // faces over to the decoded points and tunes against that surface just as
 // for an exact level. Coarser levels only approximate the input: unless the
 // fidelity is exact, they keep the rule's labels and let the decoder's
-// repair mend what makes the surface unsound; with fit_coarse_levels they
-// follow the input as the finest level does, aiming at its topology.
+// repair mend what makes the surface unsound; when `fit` (fit_coarse_levels,
+// levels of octree cells) they follow the input as the finest level does,
+// aiming at its topology.
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
-                         const EncodeOptions& options, const LevelPlan* finest, const LossyTarget* lossy = nullptr,
+                         const EncodeOptions& options, bool fit, const LevelPlan* finest,
+                         const LossyTarget* lossy = nullptr,
                          WindingCache* winding = nullptr, HelperBudget* helpers = nullptr) {
   const Fidelity fidelity = options.fidelity;
   const bool coarser = finest != nullptr;
@@ -151,7 +155,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.helpers = helpers;
   // Coarser levels only approximate the input; exact fidelity still follows
   // it, and so does any fidelity but the rule's when asked to fit them.
-  ti.approximate = coarser && fidelity != Fidelity::exact && !(options.fit_coarse_levels && fidelity != Fidelity::rule);
+  ti.approximate = coarser && fidelity != Fidelity::exact && !(fit && fidelity != Fidelity::rule);
   const bool closed = kind == Kind::volume || fine.border.empty();
   if (!ti.approximate && (lossy || ((fidelity == Fidelity::shape || fidelity == Fidelity::topology) && closed))) {
     // The target can be unsound (a lossy level's carried surface folds where
@@ -166,7 +170,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
     if (closed) {
       // A fitted coarser level aims at the whole input's topology: the input
       // faces whose vertices all survive on it are only a patchwork.
-      const auto [components, euler] = surface_topology(coarser && options.fit_coarse_levels ? surface : faces);
+      const auto [components, euler] = surface_topology(coarser && fit ? surface : faces);
       ti.target_components = components;
       ti.target_euler = euler;
     }
@@ -193,6 +197,33 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
                                : reconstruct_from_labels(dt, kind, plan.params, std::move(tr.labels), &tr.candidates);
   plan.report.label_corrections = tr.corrections;
   plan.report.rule_mismatches = tr.mismatches_before_toggles;
+}
+
+// The input surface as a level of octree cells would draw it, the target of
+// its reconstruction: each input point merged into the
+// level's point nearest to it, the faces that do not collapse kept. Few
+// input faces keep all three vertices on such a level, so those alone
+// would be no target.
+LossyTarget clustered_target(const std::vector<GridPoint>& level, const std::vector<GridPoint>& fine_points,
+                             const InputOnGrid& fine) {
+  std::vector<KdTree<std::int64_t>::Point> ip;
+  ip.reserve(level.size());
+  for (const auto& p : level) ip.push_back({std::int64_t{p[0]}, std::int64_t{p[1]}, std::int64_t{p[2]}});
+  const KdTree<std::int64_t> tree(ip);
+  LossyTarget target;
+  target.index.resize(fine_points.size());
+  target.positions.resize(fine_points.size());
+  for (std::size_t f = 0; f < fine_points.size(); ++f) {
+    const auto& p = fine_points[f];
+    const auto at = static_cast<std::uint32_t>(tree.nearest({std::int64_t{p[0]}, std::int64_t{p[1]}, std::int64_t{p[2]}}).index);
+    target.index[f] = at;
+    target.positions[f] = {double(level[at][0]), double(level[at][1]), double(level[at][2])};
+  }
+  for (const auto& t : fine.surface)
+    if (target.index[t[0]] != target.index[t[1]] && target.index[t[1]] != target.index[t[2]] &&
+        target.index[t[0]] != target.index[t[2]])
+      target.surface.push_back(t);
+  return target;
 }
 
 // The RCON payload of a level: its border as a change to the coarser
@@ -337,7 +368,8 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
       if (a != b && b != c && a != c) target.surface.push_back(t);
     }
     const Tetrahedralization dt = delaunay(plan.points);
-    plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options, i > 0 ? &plans.front() : nullptr,
+    plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options, options.fit_coarse_levels,
+                        i > 0 ? &plans.front() : nullptr,
                         &target);
     lr.simplices = kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
   }
@@ -394,6 +426,42 @@ class LayerJobs {
   std::map<std::size_t, std::future<RefinementLayer>> jobs_;
 };
 
+// A level of octree cells (EncodeOptions::preview_ratio): the points of
+// `points` (more than one) to remove so that one per occupied octree cell
+// stays, the one nearest the cell's centre (ties: the first in canonical
+// order), at the finest depth d (cells of side 2^(q-d)) whose occupied
+// cells are at most half the points.
+DecimationResult octree_cells(const std::vector<GridPoint>& points, int q) {
+  const double budget = 0.5 * static_cast<double>(points.size());
+  auto cells_at = [&](int d) {
+    std::vector<std::uint64_t> keys(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q) >> (3 * (q - d));
+    std::sort(keys.begin(), keys.end());
+    return static_cast<std::size_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+  };
+  int d = 0;
+  while (d < q && static_cast<double>(cells_at(d + 1)) <= budget) ++d;
+  const int shift = q - d;
+  // Doubled coordinates: a cell's centre is 2c + 1 cells of half its side.
+  std::map<std::uint64_t, std::pair<std::uint64_t, std::size_t>> best;  // cell -> (squared distance, index)
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::uint64_t cell = morton_key(points[i], q) >> (3 * shift);
+    std::uint64_t dist = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (shift == 0) break;
+      const std::int64_t p = std::int64_t{points[i][a]} * 2;
+      const std::int64_t c = ((std::int64_t{points[i][a]} >> shift) << (shift + 1)) + (std::int64_t{1} << shift);
+      dist += static_cast<std::uint64_t>((p - c) * (p - c));
+    }
+    auto [it, fresh] = best.try_emplace(cell, dist, i);
+    if (!fresh && dist < it->second.first) it->second = {dist, i};
+  }
+  DecimationResult dr;
+  dr.removed.assign(points.size(), true);
+  for (const auto& [cell, kept] : best) dr.removed[kept.second] = false;
+  return dr;
+}
+
 Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   check_connectivity(input);
   if (options.vq_bits < 0 || options.vq_bits > kMaxVqBits)
@@ -406,6 +474,8 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     fail(Status::invalid_argument, "levels must be between 1 and 64, got " + std::to_string(options.levels));
   if (!(options.removal_ratio > 0 && options.removal_ratio <= 1))
     fail(Status::invalid_argument, "removal ratio must be in (0, 1]");
+  if (!(options.preview_ratio >= 0 && options.preview_ratio < 1))
+    fail(Status::invalid_argument, "preview ratio must be in [0, 1)");
   Encoded out;
   EncodeReport& rep = out.report;
   rep.kind = options.kind ? *options.kind : detect_kind(input);
@@ -441,22 +511,35 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   LayerJobs jobs(options.vq_bits == 0, helpers);  // lossy layers are planned apart
   const std::uint8_t base_coder = options.fast_decode ? 0 : 5;
   std::string stopped;  // why a level before the last requested one is the coarsest
-  for (int k = 0; k < options.levels; ++k) {
-    progress(k, 0);
+  // EncodeOptions::preview_ratio: below the independent-set levels, levels
+  // of octree cells until one holds at most this many points.
+  const double preview_points = options.preview_ratio * static_cast<double>(fine_points.size());
+  bool of_cells = false;  // the level being planned is made of octree cells
+  for (int k = 0; k < static_cast<int>(kMaxLevels); ++k) {
+    progress(std::min(k, options.levels - 1), 0);
     LevelPlan plan;
     plan.points = std::move(current);
     current.clear();
     plan.report.lod = k;
-    const bool more = k + 1 < options.levels && plan.points.size() > 4;
+    const bool by_cells = k + 1 >= options.levels;  // the next coarser level, if any, is made of octree cells
+    const bool more = plan.points.size() > 4 && k + 1 < static_cast<int>(kMaxLevels) &&
+                      (!by_cells || (options.preview_ratio > 0 && static_cast<double>(plan.points.size()) > preview_points));
     if (!more)  // the coarsest level: its points are the base layer's
       jobs.start(plans.size(), [points = plan.points, q, base_coder] {
         return RefinementLayer{0, encode_base(points, q, base_coder)};
       });
     Tetrahedralization dt;
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
-    if (rep.kind != Kind::points)
+    if (rep.kind != Kind::points) {
+      std::optional<LossyTarget> clustered;
+      // Levels of octree cells are few points: fitting them to the input
+      // costs little (2 % of the stream on the shared models) and makes the
+      // preview look like the model.
+      if (of_cells && options.fidelity != Fidelity::rule) clustered = clustered_target(plan.points, fine_points, fine);
       plan_reconstruction(plan, dt, rep.kind, fine, fine_points, fine_gp, options,
-                          k > 0 ? &plans.front() : nullptr, nullptr, &winding, &helpers);
+                          options.fit_coarse_levels || of_cells, k > 0 ? &plans.front() : nullptr,
+                          clustered ? &*clustered : nullptr, &winding, &helpers);
+    }
     if (more) {
       LevelMesh mesh;
       mesh.points = &plan.points;
@@ -472,7 +555,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
       dopt.boundary = to_detail(options.boundary_mode);
       dopt.optimizer = to_detail(options.optimizer);
       dopt.level = k;
-      const DecimationResult dr = decimate(mesh, dopt, state);
+      const DecimationResult dr = by_cells ? octree_cells(plan.points, q) : decimate(mesh, dopt, state);
       auto& lr = plan.report;
       lr.boundary_removed = dr.boundary_removed;
       lr.inner_removed = dr.inner_removed;
@@ -506,6 +589,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
                           "connectivity from their 3D Delaunay tetrahedralization, so it rebuilds no " +
                           (rep.kind == Kind::surface ? "triangles" : "tetrahedra"));
     plans.push_back(std::move(plan));
+    of_cells = by_cells;
     work_done += std::pow(1.0 - 0.5 * options.removal_ratio, k);
     if (current.empty()) break;
   }
