@@ -48,6 +48,8 @@ const char* kUsage =
     "                          (default 0: exact); the base level stays exact; needs --levels >= 2\n"
     "      --vq-residual S     with --vq-bits: add a residual of step S (every coordinate within S/2;\n"
     "                          1 = exact)\n"
+    "      --lattice OX,OY,OZ,STEP  quantize onto this grid (point i at origin + i * STEP, q = --bits)\n"
+    "                          instead of one fitted to the input's box; every point must fall on it\n"
     "      --canonical DIR     also write the canonical dump of every level\n"
     "      --fast-decode       plain octrees that decode without neighbour searches: points decode\n"
     "                          tens of times faster, streams get larger (surfaces by a fifth to a half)\n"

@@ -410,7 +410,8 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   EncodeReport& rep = out.report;
   rep.kind = options.kind ? *options.kind : detect_kind(input);
   if (static_cast<int>(rep.kind) > 2) fail(Status::invalid_argument, "unknown kind");
-  rep.quantizer = fit_quantizer(input.points, options.bits);
+  rep.quantizer = options.lattice ? lattice_quantizer(input.points, options.bits, options.lattice->origin, options.lattice->step)
+                                  : fit_quantizer(input.points, options.bits);
   const int q = rep.quantizer.bits;
   const auto quantized = quantize(input.points, rep.quantizer);
   std::vector<GridPoint> fine_points = quantized;
