@@ -265,6 +265,11 @@ struct Encoded {
 /// binary64 steps).
 Result<Encoded> encode(const Mesh& input, const EncodeOptions& options = {});
 
+/// The grid encode() fits to `points` when EncodeOptions::lattice is unset
+/// (box minimum, largest extent / (2^bits - 1)): what a tiled model's tiles
+/// share (spec/tiles.md). Errors as encode()'s.
+Result<ScalarQuantizer> fit_lattice(const std::vector<Vec3>& points, int bits);
+
 /// Caps on what a decoder will accept; the defaults suit untrusted input.
 struct DecodeLimits {
   std::uint64_t max_points = std::uint64_t{1} << 26;  ///< points of the finest level

@@ -622,4 +622,8 @@ Result<Encoded> encode(const Mesh& input, const EncodeOptions& options) {
   return guarded<Result<Encoded>>([&] { return Result<Encoded>(encode_impl(input, options)); });
 }
 
+Result<ScalarQuantizer> fit_lattice(const std::vector<Vec3>& points, int bits) {
+  return guarded<Result<ScalarQuantizer>>([&] { return Result<ScalarQuantizer>(fit_quantizer(points, bits)); });
+}
+
 }  // namespace hmc
