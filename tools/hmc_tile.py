@@ -196,8 +196,8 @@ def main(argv):
     p.add_argument("--kind", default="auto", choices=["auto", "points", "surface", "volume"])
     p.add_argument("--margin", type=int, default=None, help="margin in lattice units (default: 4 mean edge lengths)")
     p.add_argument("--fidelity", default="exact", choices=["rule", "topology", "shape", "exact"],
-                   help="per tile (default exact: tiles then agree at their borders, where shape leaves
-                   "flat flips to each tile's own rule)")
+                   help="per tile (default exact: tiles then agree at their borders, where shape leaves "
+                        "flat flips to each tile's own rule)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler (default: a LocalCluster)")
     p.add_argument("--workers", type=int, default=2, help="LocalCluster or pool workers (default 2)")
     p.add_argument("--retries", type=int, default=2, help="retries of a failed tile job (default 2)")
