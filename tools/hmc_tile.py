@@ -219,6 +219,9 @@ def main(argv):
             if args.scheduler:
                 p.error("--scheduler needs Dask (python3-distributed), which this python3 lacks")
 
+    # SIGTERM (a killed job, a cancelled batch run) unwinds like an error:
+    # the temporary directory is removed and no output appears.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     out = os.path.abspath(args.output)
     if os.path.exists(out) and not os.path.isfile(os.path.join(out, "tiles.json")):
         print("hmc tile: %s exists and is not a tiled model; not replacing it" % args.output, file=sys.stderr)
