@@ -304,4 +304,19 @@ Result<Done> write_canonical_dump(const std::string& dir, Kind kind, const Scala
   return Done{};
 }
 
+std::vector<double> parse_doubles(const std::string& s) {
+  std::vector<double> out;
+  std::size_t at = 0;
+  while (at <= s.size()) {
+    const std::size_t comma = std::min(s.find(',', at), s.size());
+    const std::string item = s.substr(at, comma - at);
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end || !std::isfinite(v)) return {};
+    out.push_back(v);
+    at = comma + 1;
+  }
+  return out;
+}
+
 }  // namespace hmc::cli

@@ -130,6 +130,10 @@ Result<Done> write_canonical_dump(const std::string& dir, Kind kind, const Scala
                                   const std::vector<std::uint64_t>& declared_points,
                                   const std::vector<DumpLevel>& levels);
 
+/// Comma-separated numbers ("1,2.5,-3"); empty when any item is not a
+/// finite number.
+std::vector<double> parse_doubles(const std::string& s);
+
 /// Format a double as C printf "%.17g".
 std::string g17(double v);
 

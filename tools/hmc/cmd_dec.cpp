@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "cli.hpp"
+#include "tiles.hpp"
 #include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
 
@@ -67,7 +68,7 @@ std::map<std::pair<int, bool>, double> seconds_by_phase(const std::vector<Phase>
 int cmd_dec(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--points-only"},
          {"-o", "--output", "--level", "--all-levels", "--ext", "--canonical", "--max-points", "--max-levels", "--max-memory",
-          "--coords", "--rebuild", "--threads"});
+          "--coords", "--rebuild", "--threads", "--region"});
   DecodeOptions opt;
   opt.finest_level = static_cast<int>(a.get_int("--level", 0, 0, 63));
   opt.limits.max_points = static_cast<std::uint64_t>(
@@ -106,6 +107,11 @@ int cmd_dec(int argc, char** argv) {
     return kUsage;
   }
   const std::string in = a.positional()[0];
+  if (is_tiled(in)) return dec_tiled(a, opt);  // spec/tiles.md
+  if (a.has("--region")) {
+    std::fprintf(stderr, "hmc dec: --region needs a tiled model (a directory with tiles.json)\n");
+    return kUsage;
+  }
   // Progress on a terminal only: scripts reading stderr get no noise. The
   // progress calls are also timed, for --json's per-level phases.
   const bool tty = isatty(fileno(stderr)) != 0;

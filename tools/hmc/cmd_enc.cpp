@@ -29,7 +29,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode", "--fit-coarse"},
          {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio", "--preview",
-          "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads"});
+          "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads", "--lattice"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
   bool kind_ok = true;
@@ -71,6 +71,17 @@ int cmd_enc(int argc, char** argv) {
       return kUsage;
     }
   }
+  if (a.has("--lattice")) {
+    // ox,oy,oz,step (the grid is one step on all axes; ox,oy,oz,s,s,s is accepted too).
+    const auto v = parse_doubles(a.get("--lattice"));
+    const bool six_equal = v.size() == 6 && v[3] == v[4] && v[4] == v[5];
+    if (!(v.size() == 4 || six_equal)) {
+      std::fprintf(stderr, "hmc enc: --lattice takes ox,oy,oz,step (one step for all three axes), got '%s'\n",
+                   a.get("--lattice").c_str());
+      return kUsage;
+    }
+    opt.lattice = EncodeOptions::Lattice{{v[0], v[1], v[2]}, v[3]};
+  }
   const std::string bm = a.get("--boundary", "linear");
   if (bm == "constant") opt.boundary_mode = BoundaryMode::constant;
   else if (bm == "linear") opt.boundary_mode = BoundaryMode::linear;
@@ -99,7 +110,7 @@ int cmd_enc(int argc, char** argv) {
                  "hmc enc: %s\n"
                  "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--preview R]\n"
                  "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse] [--vq-bits B [--vq-residual S]]\n"
-                 "                  [--fast-decode] [--canonical DIR] [--no-info] [--threads N] [--json]\n"
+                 "                  [--fast-decode] [--lattice OX,OY,OZ,STEP] [--canonical DIR] [--no-info] [--threads N] [--json]\n"
                  "                  (hmc --help says what each does)\n",
                  a.ok() ? "need one input file and -o OUT.hmc" : a.error().c_str());
     return kUsage;

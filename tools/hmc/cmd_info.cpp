@@ -3,6 +3,7 @@
 #include <string>
 
 #include "cli.hpp"
+#include "tiles.hpp"
 #include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
 
@@ -47,6 +48,7 @@ int cmd_info(int argc, char** argv) {
     return kUsage;
   }
   const std::string in = a.positional()[0];
+  if (is_tiled(in)) return info_tiled(in, a.flag("--json"));  // spec/tiles.md
   DecodeLimits limits;
   auto bytes = io::read_file(in, limits.max_bytes);
   if (!bytes) return report("cannot read " + in, bytes.error(), Stage::input);

@@ -22,6 +22,8 @@ int cmd_info(int argc, char** argv);
 int cmd_gen(int argc, char** argv);
 int cmd_quality(int argc, char** argv);
 int cmd_analyze(int argc, char** argv);
+int cmd_tile(int argc, char** argv);
+int cmd_tile_split(int argc, char** argv);
 }  // namespace hmc::cli
 
 namespace {
@@ -51,6 +53,8 @@ const char* kUsage =
     "                          (default 0: exact); the base level stays exact; needs --levels >= 2\n"
     "      --vq-residual S     with --vq-bits: add a residual of step S (every coordinate within S/2;\n"
     "                          1 = exact)\n"
+    "      --lattice OX,OY,OZ,STEP  quantize onto this grid (point i at origin + i * STEP, q = --bits)\n"
+    "                          instead of one fitted to the input's box; every point must fall on it\n"
     "      --canonical DIR     also write the canonical dump of every level\n"
     "      --fast-decode       plain octrees that decode without neighbour searches: points decode\n"
     "                          tens of times faster, streams get larger (surfaces by a fifth to a half)\n"
@@ -83,6 +87,12 @@ const char* kUsage =
     "      a mesh is encoded with the enc options --bits --kind --levels (here 4 unless given) --ratio\n"
     "      --boundary --fidelity; --optimizer takes a comma-separated list: a volume is encoded once\n"
     "      per entry (forward,backward,greedy unless given); --classes C  MEC classes (16 unless given)\n"
+    "  tile IN -o TILED    a tiled model (spec/tiles.md): tiles.json + one stream per tile, encoded as\n"
+    "                      independent jobs on Dask (a local cluster, or --scheduler ADDRESS); hmc tile --help\n"
+    "  tile-split IN -o WORKDIR  the per-tile inputs and plan.json that hmc tile encodes\n"
+    "      --tile-points N  --bits Q  --margin M (lattice units; default 4 mean edge lengths)  --kind K\n"
+    "      (dec and info take a tiled model's directory too: dec TILED --canonical DIR | -o OUT\n"
+    "       [--region xmin,ymin,zmin,xmax,ymax,zmax] [--level K]; info TILED)\n"
     "  gen SAMPLE -o OUT   write a generated sample: torus, sphere (surfaces), ball, lattice (points)\n"
     "      --vertices N        about N vertices (default 36450)    --seed S   random seed\n"
     "      --ascii             ASCII PLY (default binary)\n"
@@ -118,6 +128,7 @@ int main(int argc, char** argv) {
     return hmc::cli::kUsage;
   }
   const std::string cmd = argv[1];
+  if (cmd == "tile") return hmc::cli::cmd_tile(argc, argv);  // its own --help (tools/hmc_tile.py)
   for (int i = 2; i < argc; ++i)
     if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
       std::fputs(kUsage, stdout);
@@ -129,6 +140,7 @@ int main(int argc, char** argv) {
   if (cmd == "gen") return hmc::cli::cmd_gen(argc, argv);
   if (cmd == "quality") return hmc::cli::cmd_quality(argc, argv);
   if (cmd == "analyze") return hmc::cli::cmd_analyze(argc, argv);
+  if (cmd == "tile-split") return hmc::cli::cmd_tile_split(argc, argv);
   if (cmd == "version" || cmd == "--version") {
     std::printf("hmc %s\n", hmc::version_string());
     return 0;

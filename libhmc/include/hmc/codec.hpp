@@ -179,6 +179,17 @@ struct EncodeOptions {
   /// takes 5-11 % more off four-level encodes of the bunny, the horse and
   /// hand_tetgen).
   unsigned threads = 1;
+  /// The grid to quantize onto, instead of one fitted to the input's bounding
+  /// box: grid point i is origin + i * step (ScalarQuantizer), q = `bits`. A
+  /// tiled model (spec/tiles.md) encodes every tile on its one global grid,
+  /// so tiles decode to the lattice coordinates of the untiled model. Every
+  /// input point must round into [0, 2^q - 1] on each axis (invalid_argument
+  /// otherwise: nothing is clamped); origin finite, step finite and > 0.
+  struct Lattice {
+    Vec3 origin{};
+    double step = 1.0;
+  };
+  std::optional<Lattice> lattice = std::nullopt;
 };
 
 /// Per-level figures of an encoded or decoded stream.
@@ -270,6 +281,11 @@ struct Encoded {
 /// empty input, NaN or infinite coordinates, coordinate range too large for
 /// binary64 steps).
 Result<Encoded> encode(const Mesh& input, const EncodeOptions& options = {});
+
+/// The grid encode() fits to `points` when EncodeOptions::lattice is unset
+/// (box minimum, largest extent / (2^bits - 1)): what a tiled model's tiles
+/// share (spec/tiles.md). Errors as encode()'s.
+Result<ScalarQuantizer> fit_lattice(const std::vector<Vec3>& points, int bits);
 
 /// Caps on what a decoder will accept; the defaults suit untrusted input.
 struct DecodeLimits {

@@ -480,7 +480,8 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   EncodeReport& rep = out.report;
   rep.kind = options.kind ? *options.kind : detect_kind(input);
   if (static_cast<int>(rep.kind) > 2) fail(Status::invalid_argument, "unknown kind");
-  rep.quantizer = fit_quantizer(input.points, options.bits);
+  rep.quantizer = options.lattice ? lattice_quantizer(input.points, options.bits, options.lattice->origin, options.lattice->step)
+                                  : fit_quantizer(input.points, options.bits);
   const int q = rep.quantizer.bits;
   const auto quantized = quantize(input.points, rep.quantizer);
   std::vector<GridPoint> fine_points = quantized;
@@ -703,6 +704,10 @@ const char* optimizer_name(Optimizer o) noexcept {
 
 Result<Encoded> encode(const Mesh& input, const EncodeOptions& options) {
   return guarded<Result<Encoded>>([&] { return Result<Encoded>(encode_impl(input, options)); });
+}
+
+Result<ScalarQuantizer> fit_lattice(const std::vector<Vec3>& points, int bits) {
+  return guarded<Result<ScalarQuantizer>>([&] { return Result<ScalarQuantizer>(fit_quantizer(points, bits)); });
 }
 
 }  // namespace hmc

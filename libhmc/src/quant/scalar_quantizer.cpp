@@ -55,6 +55,35 @@ ScalarQuantizer fit_quantizer(const std::vector<Vec3>& points, int q) {
   return sq;
 }
 
+ScalarQuantizer lattice_quantizer(const std::vector<Vec3>& points, int q, const Vec3& origin, double step) {
+  if (q < 1 || q > 21) fail(Status::invalid_argument, "bits must be between 1 and 21, got " + std::to_string(q));
+  if (points.empty()) fail(Status::invalid_argument, "the input has no points");
+  for (double o : origin)
+    if (!std::isfinite(o)) fail(Status::invalid_argument, "the lattice origin is not finite");
+  if (!(step > 0) || !std::isfinite(step)) fail(Status::invalid_argument, "the lattice step must be finite and > 0");
+  ScalarQuantizer sq;
+  sq.bits = q;
+  sq.origin = origin;
+  for (double& o : sq.origin)
+    if (o == 0) o = 0.0;
+  sq.step = step;
+  const double top = static_cast<double>(sq.cells() - 1);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      const double v = points[i][a];
+      if (!std::isfinite(v))
+        fail(Status::invalid_argument, "point " + std::to_string(i) + " has a " + (std::isnan(v) ? "NaN" : "infinite") +
+                                           " coordinate");
+      // The same rounding as quantize(): it must land on the grid unclamped.
+      const double t = std::round((v - sq.origin[a]) / sq.step);
+      if (!(t >= 0 && t <= top))
+        fail(Status::invalid_argument, "point " + std::to_string(i) + " lies outside the given lattice (axis " +
+                                           std::to_string(a) + ", grid coordinate " + std::to_string(t) + ", q = " +
+                                           std::to_string(q) + ")");
+    }
+  return sq;
+}
+
 std::vector<GridPoint> quantize(const std::vector<Vec3>& points, const ScalarQuantizer& sq) {
   const double top = static_cast<double>(sq.cells() - 1);
   std::vector<GridPoint> out(points.size());

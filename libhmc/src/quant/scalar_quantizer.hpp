@@ -16,6 +16,11 @@ namespace hmc::detail {
 /// invalid_argument on NaN/infinite coordinates or an unrepresentable range.
 ScalarQuantizer fit_quantizer(const std::vector<Vec3>& points, int q);
 
+/// The quantizer of a given lattice (EncodeOptions::lattice): raises
+/// invalid_argument on a bad lattice, NaN/infinite coordinates, or a point
+/// that rounds outside [0, 2^q - 1] on some axis.
+ScalarQuantizer lattice_quantizer(const std::vector<Vec3>& points, int q, const Vec3& origin, double step);
+
 /// Grid point of each input point (same order, duplicates kept).
 std::vector<GridPoint> quantize(const std::vector<Vec3>& points, const ScalarQuantizer& sq);
 

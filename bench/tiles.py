@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: AGPL-3.0-or-later
+"""Tiled models (issue 54): encode a large generated torus on a local Dask
+cluster of 2 workers against the same tiles in one worker; bits per point of
+a tiled model against the untiled stream of a model that fits; a region
+query's bytes and time against decoding everything. Writes
+bench/results/tiles.md.
+
+usage: /usr/bin/python3 bench/tiles.py --hmc build/bin/hmc [--points 4000000] [--fit-points 1000000]
+       [--bits 14] [--tile-points 200000] [--work /tmp/hmc-tiles-bench]
+(Debian's python3, which has python3-dask; the runs are long: minutes.)
+"""
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+PEAK = ("import resource, subprocess, sys, json, time; t = time.time(); "
+        "p = subprocess.run(sys.argv[1:], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True); "
+        "print(json.dumps({'rc': p.returncode, 'out': p.stdout, 'err': p.stderr, 'seconds': time.time() - t, "
+        "'rss_kib': resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}))")
+
+
+def measured(cmd):
+    """Run cmd; its wall time and its peak RSS (the largest process it waited for)."""
+    r = json.loads(subprocess.run([sys.executable, "-c", PEAK] + cmd, stdout=subprocess.PIPE, text=True,
+                                  check=True).stdout)
+    if r["rc"] != 0:
+        raise SystemExit("failed: %s\n%s" % (" ".join(cmd), r["err"]))
+    return r
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--hmc", required=True)
+    ap.add_argument("--points", type=int, default=4000000)
+    ap.add_argument("--fit-points", type=int, default=1000000)
+    ap.add_argument("--bits", type=int, default=14)
+    ap.add_argument("--tile-points", type=int, default=200000)
+    ap.add_argument("--work", default="/tmp/hmc-tiles-bench")
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "tiles.md"))
+    a = ap.parse_args()
+    hmc = os.path.abspath(a.hmc)
+    os.makedirs(a.work, exist_ok=True)
+    W = lambda *p: os.path.join(a.work, *p)
+    rows = []
+    log = lambda s: (print(s, file=sys.stderr, flush=True), rows.append(s))
+
+    # 1. The large model: 2 Dask workers against 1.
+    big = W("big.ply")
+    if not os.path.exists(big):
+        subprocess.run([hmc, "gen", "torus", "--vertices", str(a.points), "-o", big], check=True)
+    runs = {}
+    for workers in (2, 1):
+        out = W("big-%d.tiles" % workers)
+        shutil.rmtree(out, ignore_errors=True)
+        r = measured([hmc, "tile", big, "-o", out, "--bits", str(a.bits), "--tile-points", str(a.tile_points),
+                      "--workers", str(workers), "--engine", "dask", "--json"])
+        runs[workers] = dict(json.loads(r["out"]), driver_rss_kib=r["rss_kib"])
+    same = all(open(os.path.join(W("big-2.tiles"), n), "rb").read() == open(os.path.join(W("big-1.tiles"), n), "rb").read()
+               for n in os.listdir(W("big-2.tiles")))
+
+    # 2. Bits per point against the untiled stream of a model that fits.
+    fit = W("fit.ply")
+    if not os.path.exists(fit):
+        subprocess.run([hmc, "gen", "torus", "--vertices", str(a.fit_points), "-o", fit], check=True)
+    untiled = {}
+    for fid in ("exact", "shape"):
+        r = measured([hmc, "enc", fit, "-o", W("fit-%s.hmc" % fid), "--bits", str(a.bits), "--fidelity", fid, "--json"])
+        untiled[fid] = dict(json.loads(r["out"]), seconds=r["seconds"], rss_kib=r["rss_kib"])
+    tiled = {}
+    for tp in (a.tile_points, 4 * a.tile_points // 2, a.fit_points // 10):
+        out = W("fit-%d.tiles" % tp)
+        shutil.rmtree(out, ignore_errors=True)
+        r = measured([hmc, "tile", fit, "-o", out, "--bits", str(a.bits), "--tile-points", str(tp), "--workers", "2",
+                      "--json"])
+        tiled[tp] = json.loads(r["out"])
+
+    # 3. A region query on the large model against decoding all of it.
+    index = json.load(open(os.path.join(W("big-2.tiles"), "tiles.json")))
+    total = sum(t["bytes"] for t in index["tiles"])
+    dec_all = measured([hmc, "dec", W("big-2.tiles"), "-o", W("big-all.ply"), "--json"])
+    region = "0.9,0.9,-1,2,2,1"
+    dec_reg = measured([hmc, "dec", W("big-2.tiles"), "--region", region, "-o", W("big-region.ply"), "--json"])
+    ja, jr = json.loads(dec_all["out"]), json.loads(dec_reg["out"])
+
+    p2, p1 = runs[2], runs[1]
+    L = []
+    L.append("# Tiled models: parallel encoding, size, region queries (issue 54)")
+    L.append("")
+    L.append("Regenerate: `/usr/bin/python3 bench/tiles.py --hmc build/bin/hmc --points %d --fit-points %d "
+             "--bits %d --tile-points %d` (%s, %d cores shared with other work; Release build)." %
+             (a.points, a.fit_points, a.bits, a.tile_points, time.strftime("%Y-%m-%d"), os.cpu_count()))
+    L.append("Models: `hmc gen torus` (a closed surface, 2:1 grid of triangles), q = %d, `hmc tile` defaults "
+             "(`--fidelity exact`, margin 4 mean edge lengths, 1 level)." % a.bits)
+    L.append("")
+    L.append("## 1. Encoding %d points: 2 Dask workers against the same tiles in 1" % p2["points"])
+    L.append("")
+    L.append("| workers | tiles | margin (lattice units) | points in the streams | split s | encode s | wall s | "
+             "peak RSS per worker (worker process / its largest `hmc enc`) | driver peak RSS (`hmc tile-split`) |")
+    L.append("|---|---|---|---|---|---|---|---|---|")
+    for w, r in ((2, p2), (1, p1)):
+        per = "; ".join("%.0f / %.0f MiB (%d tiles)" % (v["worker_rss_kib"] / 1024, v["encoder_rss_kib"] / 1024, v["tiles"])
+                        for v in r["workers"].values())
+        L.append("| %d | %d | %d | %d (%.3f x) | %.1f | %.1f | %.1f | %s | %.0f MiB |" %
+                 (w, r["tiles"], r["margin"], r["stream_points"], r["stream_points"] / r["points"], r["split_seconds"],
+                  r["encode_seconds"], r["wall_seconds"], per, r["driver_rss_kib"] / 1024))
+    L.append("")
+    L.append("Encode speed-up with 2 workers: %.2f x (encode phase), %.2f x (wall). Both runs wrote the same files "
+             "byte for byte: %s. Total %.3f bits per point." %
+             (p1["encode_seconds"] / p2["encode_seconds"], p1["wall_seconds"] / p2["wall_seconds"], same,
+              p2["bits_per_point"]))
+    L.append("")
+    L.append("## 2. Bits per point against the untiled stream (%d points)" % a.fit_points)
+    L.append("")
+    L.append("| stream | tiles | points in the streams | bytes | bits per point | / untiled exact | / untiled shape |")
+    L.append("|---|---|---|---|---|---|---|")
+    be, bs = untiled["exact"]["bits_per_point"], untiled["shape"]["bits_per_point"]
+    for fid in ("exact", "shape"):
+        u = untiled[fid]
+        L.append("| untiled, --fidelity %s (%.1f s, %.0f MiB) | 1 | %d | %d | %.3f | %.3f | %.3f |" %
+                 (fid, u["seconds"], u["rss_kib"] / 1024, u["distinct_points"], u["bytes"], u["bits_per_point"],
+                  u["bits_per_point"] / be, u["bits_per_point"] / bs))
+    for tp, r in sorted(tiled.items(), reverse=True):
+        L.append("| tiled, --tile-points %d (exact) | %d | %d (%.3f x) | %d | %.3f | %.3f | %.3f |" %
+                 (tp, r["tiles"], r["stream_points"], r["stream_points"] / r["points"], r["bytes"],
+                  r["bits_per_point"], r["bits_per_point"] / be, r["bits_per_point"] / bs))
+    L.append("")
+    L.append("## 3. A region query on the %d-point model" % p2["points"])
+    L.append("")
+    L.append("| decode | tiles read | bytes read | of all bytes | wall s | points out | triangles out |")
+    L.append("|---|---|---|---|---|---|---|")
+    for name, r, j in (("everything (`-o`)", dec_all, ja), ("`--region %s` (`-o`)" % region, dec_reg, jr)):
+        L.append("| %s | %d of %d | %d | %.3f | %.2f | %d | %d |" %
+                 (name, j["tiles_read"], j["tiles"], j["bytes_read"], j["bytes_read"] / total, r["seconds"],
+                  j["levels"][-1]["points"], j["levels"][-1]["triangles"]))
+    L.append("")
+    with open(a.out, "w") as f:
+        f.write("\n".join(L) + "\n")
+    print("\n".join(L))
+
+
+if __name__ == "__main__":
+    main()
