@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x17"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x19"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -309,7 +309,7 @@ class PairedCoder:
         self.pair_syms = [a * 8 + b if a < 8 and b < 8 else 64 for a, b in self.pairs]
         escaped = [v for (a, b), p in zip(self.pairs, self.pair_syms) if p == 64 for v in (a, b)]
         # phantoms: pairs (0, 0) and (0, 1) counted once more, so that the pair
-        # code has two symbols at least (§8.5, ranked depths)
+        # code has two symbols at least (§8.2, ranked depths)
         self.pair_coder = Coder(self.pair_syms + ([0, 1] if phantoms else []), 65)
         self.escape = Coder(escaped, alphabet) if escaped else None
         self.next = 0
@@ -371,15 +371,16 @@ def base_payload(points, q):
     return b"\x00" + bw.bytes()
 
 
-def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None, wide=False):
-    """§8.2 ranked octree coder (coder 1), written from the decoder's ranking
-    (refdec.child_order over the node centres of each depth); ranked[d]
-    says whether depth d is ranked; `classes` contexts per ranked depth.
-    gaps: coder 2 (§8.3) with weight gaps[d] at each ranked depth.
-    quadric: coder 3 (§8.4), with gaps, and quadric[d] the depth's flag.
-    paired: coder 4 (§8.5), with gaps and quadric; paired(d, j) says whether
-    table j of depth d is paired (§7.4). wide: coder 5 (§8.6), coder 4 with
-    5-bit weights, 16 the far ranking."""
+def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None):
+    """§8.2 ranked octree coder (coder 5), written from the decoder's ranking
+    (refdec.child_order over each node's causal points); ranked[d] says
+    whether depth d is ranked; `classes` contexts per ranked depth; gaps[d]
+    the weight of ranked depth d (0 when None; 16 the far ranking);
+    quadric[d] its quadric flag (all 0 when None); paired(d, j) whether table
+    j of depth d is paired (§7.4; none when None)."""
+    gaps = gaps or [0] * q
+    quadric = quadric or [False] * q
+    paired = paired or (lambda d, j: False)
     syms = []
     for d, nodes, occ_by_node in octree_levels(points, q):
         if not ranked[d]:
@@ -391,13 +392,9 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
         occs = [occ_by_node[n] for n in nodes]
         row = []
         for i, node in enumerate(nodes):
-            if quadric is not None:
-                P = refdec.causal_points(nodes, occs, i, nb, neighbours, h)
-                pi, split = refdec.child_order(node, d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
-                                               fit=len(P) if quadric[d] else 0, points=P)
-            else:
-                pi, split = refdec.child_order(node, d, q, 0, centres, nb, neighbours, want_split=True,
-                                               gap=gaps[d] if gaps else 0, gap_from=1)
+            P = refdec.causal_points(nodes, occs, i, nb, neighbours, h)
+            pi, split = refdec.child_order(node, d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
+                                           fit=len(P) if quadric[d] else 0, points=P)
             occ = occ_by_node[node]
             ctx = min((0, 1, 2, 2, 3)[split], classes - 1)
             row.append((ctx, refdec.E.index(sum(1 << r for r in range(8) if occ >> pi[r] & 1))))
@@ -408,9 +405,8 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
     coders = []
     for d in range(q):
         bw.put(1 if ranked[d] else 0, 1)
-        if ranked[d] and gaps:
-            bw.put(gaps[d], 5 if wide else 4)
-        if ranked[d] and quadric is not None:
+        if ranked[d]:
+            bw.put(gaps[d], 5)
             bw.put(1 if quadric[d] else 0, 1)
         if ranked[d]:
             # One table per context, of two symbols at least (§8.2): a context
@@ -418,14 +414,13 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
             row = []
             for j in range(classes):
                 seq = [v for c, v in syms[d] if c == j]
-                row.append(PairedCoder(seq, 255, phantoms=True) if paired and paired(d, j) and seq
+                row.append(PairedCoder(seq, 255, phantoms=True) if paired(d, j) and seq
                            else Coder(seq + [0, 1], 255))
             coders.append(row)
         else:
-            coders.append([PairedCoder(syms[d], 256) if paired and paired(d, 0) else Coder(syms[d], 256)])
+            coders.append([PairedCoder(syms[d], 256) if paired(d, 0) else Coder(syms[d], 256)])
         for c in coders[-1]:
-            if paired:
-                bw.put(1 if isinstance(c, PairedCoder) else 0, 1)
+            bw.put(1 if isinstance(c, PairedCoder) else 0, 1)
             c.table(bw)
     for d in range(q):
         for v in syms[d]:
@@ -433,13 +428,12 @@ def base_ranked_payload(points, q, neighbours, ranked, classes=1, gaps=None, qua
                 coders[d][v[0]].put(bw, v[1])
             else:
                 coders[d][0].put(bw, v)
-    coder = (b"\x05" if wide else b"\x04") if paired else b"\x03" if quadric is not None else b"\x02" if gaps else b"\x01"
-    return coder + bw.bytes()
+    return b"\x05" + bw.bytes()
 
 
-def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None, wide=False):
+def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, quadric=None, paired=None):
     pts = sorted(set(pts))
-    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps, quadric, paired, wide),
+    return stream_q1(base_ranked_payload(pts, q, neighbours, ranked, classes, gaps, quadric, paired),
                      counts=(len(pts),),
                      kind=kind, q=q,
                      rcon=None if kind == 0 else rcon_payload(len(pts), compact=True))
@@ -447,19 +441,18 @@ def base_ranked_stream(kind, q, pts, neighbours, ranked, classes=1, gaps=None, q
 
 def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables=False, planes=1, gap=None, fit=None,
                  paired=None, merge=False, tail=0, wide=False):
-    """§8A.1 conditional octree coder (planes = 2: coder 2, §8A.3, with the
-    plane context; gap not None: coder 3, §8A.4, with that weight and planes
-    1 or 2, or, a list of q weights, coder 4, §8A.5; fit not None: coder 5,
-    §8A.6, with that F and gap one weight or a list), written from the
-    decoder's ranking (refdec.child_order). paired not None: coder 6,
-    §8A.7, with the header of coder 5 (F = fit or 0), and paired(d, j) says
-    whether the table sent at depth d for slot j = (class, plane context) is
-    paired (§7.4). merge: each slot sends one table, at its first depth with
-    symbols, which the deeper depths share. tail: the unused second symbol
-    of an odd paired sequence's last pair. wide: coder 7, §8A.8, coder 6
-    with 5-bit weights (16: the far ranking).
+    """§8A.1 conditional octree coder, written from the decoder's ranking
+    (refdec.child_order): coder 0 (the short header) when planes = 1 and
+    gap, fit and paired are None and not `wide`, else coder 7 (the full
+    header) with planes 1 or 2 (the plane context), gap one weight (16: the
+    far ranking) or a list of q, fit the quadric's F (0 when None), and
+    paired(d, j) saying whether the table sent at depth d for slot j =
+    (class, plane context) is paired (§7.4). merge: each slot sends one
+    table, at its first depth with symbols, which the deeper depths share.
+    tail: the unused second symbol of an odd paired sequence's last pair.
     coarse: C in canonical order; added: A."""
-    if wide and paired is None:
+    full = wide or planes == 2 or gap is not None or fit is not None or paired is not None
+    if full and paired is None:
         paired = lambda d, j: False
     coarse = sorted(coarse)
     occ = [set() for _ in range(q + 1)]
@@ -493,15 +486,12 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
     bw = BitWriter()
     bw.put(neighbours, 4)
     bw.put(classes - 1, 2)
-    if paired is not None and fit is None:
-        fit = 0
-    if fit is not None or gap is not None:
+    if full:
         bw.put(planes - 1, 1)
-        if fit is not None:
-            bw.put(fit, 4)
-            bw.put(1 if isinstance(gap, list) else 0, 1)
+        bw.put(fit or 0, 4)
+        bw.put(1 if isinstance(gap, list) else 0, 1)
         for g in (gap if isinstance(gap, list) else [gap or 0]):
-            bw.put(g, 5 if wide else 4)
+            bw.put(g, 5)
     coder = {}
     for j in slots:
         prev = None
@@ -557,8 +547,7 @@ def refn_payload(coarse, added, q, neighbours, classes, share=True, force_tables
                 bw.put(0, 1)
     for (d, j, s) in seq:
         current[(d, j)].put(bw, s)
-    coder = 7 if wide else 6 if paired is not None else 5 if fit is not None else 4 if isinstance(gap, list) else 3 if gap is not None else 2 if planes == 2 else 0
-    return bytes([coder]) + bw.bytes()
+    return bytes([7 if full else 0]) + bw.bytes()
 
 
 def zigzag(v):
@@ -1365,7 +1354,7 @@ def hb_delta_tables():
 
 
 def hb_refn_planes():
-    # REFN coder 2 (plane contexts): neighbours 4 with 4 and 2 classes, shared
+    # REFN coder 7 with plane contexts: neighbours 4 with 4 and 2 classes, shared
     # and unshared tables, then neighbours 0 (no plane: every node in plane
     # context 0) in the delta table form.
     pts = sphere_pts(400, 9, 71)
@@ -1377,7 +1366,7 @@ def hb_refn_planes():
 
 
 def hb_refn_gap():
-    # REFN coder 3 (gap ranking): neighbours 4, G = 6 with plane contexts and
+    # REFN coder 7, gap ranking: neighbours 4, G = 6 with plane contexts and
     # 4 classes; G = 15 without plane contexts, 2 classes, unshared tables;
     # neighbours 1 with G = 9 (no plane: the order of 8A.1); neighbours 15,
     # G = 1. Added points are the points of the next level, spread by taking
@@ -1388,9 +1377,9 @@ def hb_refn_gap():
 
 
 def hb_refn_depth_gaps():
-    # REFN coder 4 (a gap weight per depth): neighbours 4, weights 0 to 15
+    # REFN coder 7, a gap weight per depth: neighbours 4, weights 0 to 15
     # over the depths with plane contexts and 3 classes; then the same weight
-    # at every depth (coder 4 saying what coder 3 would) without plane
+    # at every depth (written as one weight) without plane
     # contexts; then neighbours 1 (no plane: the weights change nothing).
     pts = sphere_pts(450, 10, 91)
     lv = nested(pts, [90, 250, 380, 450], 92)
@@ -1399,9 +1388,9 @@ def hb_refn_depth_gaps():
 
 
 def hb_refn_quadric():
-    # REFN coder 5 (quadric ranking). On a sphere: F = 10 with G = 6, plane
+    # REFN coder 7, quadric ranking. On a sphere: F = 10 with G = 6, plane
     # contexts, 3 classes; F = 15 with a weight per depth, 2 classes,
-    # unshared tables; F = 5 (below 6: no quadric, the ranking of coder 4);
+    # unshared tables; F = 5 (below 6: no quadric, the plane's ranking);
     # neighbours 1 with F = 8 (no plane normal, so no quadric). On a lattice,
     # whose points lie on few planes and conics (fits that fail, equal keys):
     # F = 10 and F = 6 with neighbours 4.
@@ -1416,7 +1405,7 @@ def hb_refn_quadric():
 
 
 def hb_refn_paired():
-    # REFN coder 6 (paired tables). On a sphere: every table paired, one
+    # REFN coder 7, paired tables. On a sphere: every table paired, one
     # table per slot shared by all its depths (pending symbols carried from
     # one depth to the next), escapes where nodes hold several points, the
     # quadric with plane contexts; then tables paired at alternate depths and
@@ -1437,7 +1426,7 @@ def hb_refn_paired():
 
 
 def hb_refn_far():
-    # REFN coder 7 (far ranking, 5-bit weights). Random points filling a
+    # REFN coder 7, far ranking. Random points filling a
     # cube (a volume's interior), q = 8: neighbours 8, far ranking at some
     # depths and gap weights 0-15 at others, plane contexts, 3 classes,
     # tables paired at alternate depths; then one weight, 16, for every
@@ -1458,7 +1447,7 @@ def hb_refn_far():
 
 
 def hb_base_gaps():
-    # BASE coder 2 (gap weights): an evenly spread sphere (a lattice's points
+    # BASE coder 5, gap weights: an evenly spread sphere (a lattice's points
     # near a sphere), neighbours 10, weights 0 to 15 over the depths, plain
     # and ranked depths mixed, 3 contexts; and neighbours 1 (no plane: the
     # weights change nothing).
@@ -1469,7 +1458,7 @@ def hb_base_gaps():
 
 
 def hb_base_causal():
-    # BASE coder 3 (causal points): points on a sphere at q = 8, neighbours
+    # BASE coder 5, causal points: points on a sphere at q = 8, neighbours
     # 10, quadric and plane depths mixed with weights, a plain depth, 3
     # contexts; a lattice with random points (ties, fits that fail: points on
     # few planes) with neighbours 15 (up to 32 points, lists cut short);
@@ -1488,7 +1477,7 @@ def hb_base_causal():
 
 
 def hb_base_paired():
-    # BASE coder 4 (paired tables): a sphere at q = 8, neighbours 10, every
+    # BASE coder 5, paired tables: a sphere at q = 8, neighbours 10, every
     # table paired (the plain depth 0 too; escapes where nodes have several
     # children; pair codes with phantom pairs where a context has few
     # nodes), quadric and plane depths, 3 contexts; lattice and random
@@ -1512,7 +1501,7 @@ def jittered_cube(n, step, jitter, seed):
 
 
 def hb_base_far():
-    # BASE coder 5 (far ranking): a jittered lattice filling a cube at q = 7,
+    # BASE coder 5, far ranking: a jittered lattice filling a cube at q = 7,
     # neighbours 10, weight 16 mixed with weights 0-15 by depth, quadric
     # flags mixed (with weight 16 the quadric breaks ties), tables paired at
     # some depths; an exact lattice plus random points (many equally far
@@ -1522,13 +1511,13 @@ def hb_base_far():
     a = base_ranked_stream(0, 7, jittered_cube(7, 16, 5, 131), 10, [False, True, True, True, True, True, True],
                            classes=3, gaps=[0, 16, 3, 16, 16, 0, 16],
                            quadric=[False, False, True, True, False, True, True],
-                           paired=lambda d, j: (d * 3 + j) % 4 != 1, wide=True)
+                           paired=lambda d, j: (d * 3 + j) % 4 != 1)
     b = base_ranked_stream(1, 6, lattice_pts(5, 12, (3, 5, 7)) + rand_pts(50, 6, 132), 15, [True] * 6, classes=2,
                            gaps=[16] * 6, quadric=[True, False, True, False, True, True],
-                           paired=lambda d, j: d % 2 == 0, wide=True)
+                           paired=lambda d, j: d % 2 == 0)
     c = base_ranked_stream(0, 5, rand_pts(60, 5, 133), 1, [False, True, True, True, True], classes=1,
                            gaps=[0, 16, 2, 16, 16], quadric=[False, True, False, False, True],
-                           paired=lambda d, j: False, wide=True)
+                           paired=lambda d, j: False)
     return a, b, c
 
 
@@ -1691,61 +1680,61 @@ HANDBUILT = [
     ("tables-delta-handbuilt", hb_delta_tables, F,
      "HEAD flag bit 0: every code-length table in the delta form (BASE, REFN with 4 and 3 classes and unshared tables, RCON class tables plain and grouped)", sec("head", "huff", "base", "refn", "rcon", "recon")),
     ("refn-planes", lambda: hb_refn_planes()[0], P,
-     "REFN coder 2 (plane contexts): neighbours 4 with 4 and 2 classes, shared and unshared tables, then neighbours 0 (every node in plane context 0)", sec("refn", "huff")),
+     "REFN coder 7 with plane contexts: neighbours 4 with 4 and 2 classes, shared and unshared tables, then neighbours 0 (every node in plane context 0)", sec("refn", "huff")),
     ("refn-planes-delta-tables", lambda: hb_refn_planes()[1], P,
-     "REFN coder 2 with three classes, its tables in the delta form", sec("head", "refn", "huff")),
+     "REFN coder 7 with plane contexts and three classes, its tables in the delta form", sec("head", "refn", "huff")),
     ("refn-gap", hb_refn_gap, P,
-     "REFN coder 3 (gap ranking): neighbours 4 with G = 6, plane contexts, 4 classes; G = 15 without plane contexts, 2 classes, unshared tables; neighbours 1 with G = 9 (no plane, the order of 8A.1); neighbours 15 with G = 1", sec("refn", "huff")),
+     "REFN coder 7, gap ranking: neighbours 4 with G = 6, plane contexts, 4 classes; G = 15 without plane contexts, 2 classes, unshared tables; neighbours 1 with G = 9 (no plane, the order of 8A.1); neighbours 15 with G = 1", sec("refn", "huff")),
     ("refn-depth-gaps", hb_refn_depth_gaps, P,
-     "REFN coder 4 (a gap weight per depth): neighbours 4 with weights 0-15 varying by depth, plane contexts, 3 classes; the same weight 5 at every depth without plane contexts; neighbours 1 with alternating weights (no plane: the order of 8A.1)", sec("refn", "huff")),
+     "REFN coder 7, a gap weight per depth: neighbours 4 with weights 0-15 varying by depth, plane contexts, 3 classes; the same weight 5 at every depth without plane contexts; neighbours 1 with alternating weights (no plane: the order of 8A.1)", sec("refn", "huff")),
     ("refn-quadric", lambda: hb_refn_quadric()[0], P,
-     "REFN coder 5 (quadric ranking) on a sphere: F = 10 with G = 6, plane contexts, 3 classes; F = 15 with a weight per depth, 2 classes, unshared tables; F = 5 (no quadric: coder 4's ranking); neighbours 1 with F = 8 (no plane normal, no quadric)", sec("refn", "huff")),
+     "REFN coder 7, quadric ranking on a sphere: F = 10 with G = 6, plane contexts, 3 classes; F = 15 with a weight per depth, 2 classes, unshared tables; F = 5 (no quadric: the plane's ranking); neighbours 1 with F = 8 (no plane normal, no quadric)", sec("refn", "huff")),
     ("refn-quadric-lattice", lambda: hb_refn_quadric()[1], P,
-     "REFN coder 5 on lattice points plus random ones: F = 10 and 6 with neighbours 4, fits that fail (points on few planes and conics) and equal keys", sec("refn", "huff")),
+     "REFN coder 7 with the quadric on lattice points plus random ones: F = 10 and 6 with neighbours 4, fits that fail (points on few planes and conics) and equal keys", sec("refn", "huff")),
     ("refn-paired", lambda: hb_refn_paired()[0], P,
-     "REFN coder 6 (paired tables) on a sphere: every table paired and shared by all the depths of its slot (pending symbols carried across depths), escapes, the quadric with plane contexts; then tables paired at alternate depths and classes with a weight per depth and F = 0", sec("refn", "huff")),
+     "REFN coder 7, paired tables on a sphere: every table paired and shared by all the depths of its slot (pending symbols carried across depths), escapes, the quadric with plane contexts; then tables paired at alternate depths and classes with a weight per depth and F = 0", sec("refn", "huff")),
     ("refn-paired-escapes", lambda: hb_refn_paired()[1], P,
-     "REFN coder 6 at q = 3: neighbours 0 with every table paired and shared across depths, many escaped pairs, an odd sequence whose unused last symbol is 5 (not the encoder's 0); neighbours 2 with G = 3, unshared tables", sec("refn", "huff")),
+     "REFN coder 7 with paired tables at q = 3: neighbours 0 with every table paired and shared across depths, many escaped pairs, an odd sequence whose unused last symbol is 5 (not the encoder's 0); neighbours 2 with G = 3, unshared tables", sec("refn", "huff")),
     ("refn-paired-single", lambda: hb_refn_paired()[2], P,
-     "REFN coder 6 at q = 2 adding one point: each paired table's pair code is the one-symbol form, and the layer's symbols cost no bits", sec("refn", "huff")),
+     "REFN coder 7 with paired tables at q = 2 adding one point: each paired table's pair code is the one-symbol form, and the layer's symbols cost no bits", sec("refn", "huff")),
     ("refn-far", lambda: hb_refn_far()[0], P,
-     "REFN coder 7 (far ranking) on random points filling a cube, q = 8: neighbours 8 with weight 16 at four depths and 0, 3, 15 and 0 at the others, plane contexts, 3 classes, alternate tables paired; weight 16 at every depth with the quadric through 10 neighbours breaking ties, 2 classes; neighbours 0 with weight 16 (g = 0: the order of the child numbers)", sec("refn", "huff")),
+     "REFN coder 7, far ranking on random points filling a cube, q = 8: neighbours 8 with weight 16 at four depths and 0, 3, 15 and 0 at the others, plane contexts, 3 classes, alternate tables paired; weight 16 at every depth with the quadric through 10 neighbours breaking ties, 2 classes; neighbours 0 with weight 16 (g = 0: the order of the child numbers)", sec("refn", "huff")),
     ("refn-far-lattice", lambda: hb_refn_far()[1], P,
-     "REFN coder 7 on lattice points plus random ones at q = 5: neighbours 4 and weight 16 at every depth, unshared tables, many children equally far from their nearest neighbour (ties by t, e, child number)", sec("refn", "huff")),
+     "REFN coder 7, far ranking, on lattice points plus random ones at q = 5: neighbours 4 and weight 16 at every depth, unshared tables, many children equally far from their nearest neighbour (ties by t, e, child number)", sec("refn", "huff")),
     ("base-gaps", lambda: hb_base_gaps()[0], P,
-     "BASE coder 2 (gap weights): points near a sphere on a lattice (ties), neighbours 10, depth 0 plain, weights 15, 3 and 8 at the ranked depths, 3 contexts", sec("base", "huff")),
+     "BASE coder 5, gap weights: points near a sphere on a lattice (ties), neighbours 10, depth 0 plain, weights 15, 3 and 8 at the ranked depths, 3 contexts", sec("base", "huff")),
     ("base-gaps-neighbours-1", lambda: hb_base_gaps()[1], P,
-     "BASE coder 2 with neighbours 1 (no plane: the weights change nothing), 2 contexts, kind surface", sec("base", "huff")),
+     "BASE coder 5 with neighbours 1 (no plane: the weights change nothing), 2 contexts, kind surface", sec("base", "huff")),
     ("base-causal", lambda: hb_base_causal()[0], P,
-     "BASE coder 3 (causal points): points on a sphere at q = 8, neighbours 10, depth 0 plain, quadric and plane depths mixed, weights 0-15, 3 contexts", sec("base", "huff")),
+     "BASE coder 5, causal points: points on a sphere at q = 8, neighbours 10, depth 0 plain, quadric and plane depths mixed, weights 0-15, 3 contexts", sec("base", "huff")),
     ("base-causal-lattice", lambda: hb_base_causal()[1], P,
-     "BASE coder 3 on lattice points plus random ones, neighbours 15 (lists cut at 32 points), every depth quadric: ties and fits that fail, 4 contexts", sec("base", "huff")),
+     "BASE coder 5 on lattice points plus random ones, neighbours 15 (lists cut at 32 points), every depth quadric: ties and fits that fail, 4 contexts", sec("base", "huff")),
     ("base-causal-few", lambda: hb_base_causal()[2], P,
-     "BASE coder 3 with neighbours 3 (at most 24 points, some nodes fewer than 6: no quadric), kind surface, 2 contexts", sec("base", "huff")),
+     "BASE coder 5 with neighbours 3 (at most 24 points, some nodes fewer than 6: no quadric), kind surface, 2 contexts", sec("base", "huff")),
     ("base-causal-neighbours-1", lambda: hb_base_causal()[3], P,
-     "BASE coder 3 with neighbours 1 (the node's own centre only: no plane, no quadric), a plain depth, 1 context", sec("base", "huff")),
+     "BASE coder 5 with neighbours 1 (the node's own centre only: no plane, no quadric), a plain depth, 1 context", sec("base", "huff")),
     ("base-paired", lambda: hb_base_paired()[0], P,
-     "BASE coder 4 (paired tables) on a sphere at q = 8: neighbours 10, every table paired, the plain depth 0's too, escapes, phantom pairs in sparse contexts, quadric and plane depths, 3 contexts", sec("base", "huff")),
+     "BASE coder 5, paired tables on a sphere at q = 8: neighbours 10, every table paired, the plain depth 0's too, escapes, phantom pairs in sparse contexts, quadric and plane depths, 3 contexts", sec("base", "huff")),
     ("base-paired-lattice", lambda: hb_base_paired()[1], P,
-     "BASE coder 4 on lattice and random points, kind surface: neighbours 15, tables paired at alternate depths and contexts, 2 contexts", sec("base", "huff")),
+     "BASE coder 5, paired tables, on lattice and random points, kind surface: neighbours 15, tables paired at alternate depths and contexts, 2 contexts", sec("base", "huff")),
     ("base-far", lambda: hb_base_far()[0], P,
-     "BASE coder 5 (far ranking) on a jittered lattice filling a cube at q = 7: neighbours 10, weight 16 at four depths mixed with weights 0 and 3, quadric ties and plane ties, tables paired at some depths, 3 contexts", sec("base", "huff")),
+     "BASE coder 5, far ranking on a jittered lattice filling a cube at q = 7: neighbours 10, weight 16 at four depths mixed with weights 0 and 3, quadric ties and plane ties, tables paired at some depths, 3 contexts", sec("base", "huff")),
     ("base-far-lattice", lambda: hb_base_far()[1], P,
      "BASE coder 5 on lattice points plus random ones, kind surface: neighbours 15, weight 16 at every depth (many equally far children), tables paired at even depths, 2 contexts", sec("base", "huff")),
     ("base-far-neighbours-1", lambda: hb_base_far()[2], P,
      "BASE coder 5 with neighbours 1 (no point besides the node's own centre: g = 0, weight 16 ranks by the plane-less t, e and c), no table paired, 1 context", sec("base", "huff")),
     ("base-causal-neighbours-0", lambda: hb_base_causal()[4], P,
-     "BASE coder 3 with neighbours 0 (no points: every child ties, the order is the child number), weights and quadric flags that change nothing, 2 contexts", sec("base", "huff")),
+     "BASE coder 5 with neighbours 0 (no points: every child ties, the order is the child number), weights and quadric flags that change nothing, 2 contexts", sec("base", "huff")),
     ("rcon-border-inherit", hb_rcon_border_inherit, F,
      "hand-written RCON flag bit 3 (inherit_border) over three levels: at the coarsest level (inherits the empty set), a level without it, then a level whose list removes two inherited border points and adds three", sec("rcon", "recon")),
     ("base-ranked-sphere", hb_base_ranked_sphere, P,
-     "BASE coder 1 (ranked octree): neighbours = 10, four contexts, every depth ranked, points on a sphere", sec("base", "refn")),
+     "BASE coder 5 (ranked octree), weights 0 and no quadric: neighbours = 10, four contexts, every depth ranked, points on a sphere", sec("base", "refn")),
     ("base-ranked-mixed", hb_base_ranked_mixed, P,
-     "BASE coder 1: neighbours = 15, three contexts, plain and ranked depths alternating, a lattice with equidistant node centres", sec("base", "refn", "huff")),
+     "BASE coder 5: neighbours = 15, three contexts, plain and ranked depths alternating, a lattice with equidistant node centres", sec("base", "refn", "huff")),
     ("base-ranked-q1", lambda: hb_base_ranked_small()[0], P,
-     "BASE coder 1 at q = 1: one node, k = min(neighbours, nodes) = 1", sec("base", "refn")),
+     "BASE coder 5 at q = 1: one node, k = min(neighbours, nodes) = 1", sec("base", "refn")),
     ("base-ranked-surface-k0", lambda: hb_base_ranked_small()[1], F,
-     "BASE coder 1 with neighbours = 0 (children by number, so every node in context 0) and two contexts, in a surface stream", sec("base", "refn", "rcon", "recon")),
+     "BASE coder 5 with neighbours = 0 (children by number, so every node in context 0) and two contexts, in a surface stream", sec("base", "refn", "rcon", "recon")),
     ("rcon-compact-surface", hb_rcon_compact_surface, F,
      "hand-written compact RCON (flag bit 2): classes in groups of 3 and 8 points, toggle ranks in five contexts, border and drop lists", sec("rcon", "recon")),
     ("rcon-class-list", hb_rcon_class_list, F,
@@ -1956,8 +1945,9 @@ NEGATIVE = [
     ("neg-huffman-single-out-of-range", "bad_huffman_table", P, "REFN single-symbol table with symbol 255 of 255", ["7.1", "8A", "13"],
      lambda: stream_q1_refn(refn_single(255))),
     ("neg-huffman-rcon-classes", "bad_huffman_table", P, "RCON class table (K = 2) with one symbol of length 1 only", ["7.1", "10", "13"], None),
-    ("neg-refn-plane-slot-none", "bad_layer", P, "REFN coder 2 at q = 1 whose only slot with a table is plane context 1; the node is in context 0", ["8A.3", "13"],
-     lambda: stream_q1_refn(b"\x02" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1), bw.put(1, 1), bw.put(0, 8))))),
+    ("neg-refn-plane-slot-none", "bad_layer", P, "REFN coder 7 at q = 1 with plane contexts whose only slot with a table is plane context 1; the node is in context 0", ["8A.1", "13"],
+     lambda: stream_q1_refn(b"\x07" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 4), bw.put(0, 1), bw.put(0, 5),
+                                                                 bw.put(0, 1), bw.put(1, 1), bw.put(0, 1), bw.put(1, 1), bw.put(0, 8))))),
     ("neg-huffman-delta-length-0", "bad_huffman_table", P, "delta-form BASE table: 3 - 2 - 1 gives a length 0", ["4", "7.1", "13"],
      lambda: stream_q1(base_with_table(lambda bw: (bw.put(0, 1), bw.put(0b1101, 4), bw.put(0b101, 3))), flags=1)),
     ("neg-huffman-delta-length-16", "bad_huffman_table", P, "delta-form BASE table: a far token +13 gives a length 16", ["4", "7.1", "13"],
@@ -1970,27 +1960,31 @@ NEGATIVE = [
      lambda: stream_q1(base_with_table(lambda bw: write_table(bw, 256, lengths={0: 1, 1: 1})), flags=1)),
     # layers
     ("neg-base-empty", "bad_layer", P, "empty BASE payload", ["8", "13"], lambda: stream_q1(b"")),
-    ("neg-base-gaps-cut", "bad_layer", P, "BASE coder 2 at q = 1 whose payload ends inside the weight of its ranked depth", ["8.3", "13"],
-     lambda: stream_q1(b"\x02" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(1, 1), bw.put(1, 1))))),
+    ("neg-base-gaps-cut", "bad_layer", P, "BASE coder 5 at q = 1 whose payload ends inside the weight of its ranked depth", ["8.2", "13"],
+     lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(1, 1), bw.put(1, 1))))),
     ("neg-base-coder", "bad_layer", P, "BASE coder 6", ["8", "13"],
      lambda: stream_q1(b"\x06" + base_payload([(0, 0, 0)], 1)[1:])),
-    ("neg-base-far-weight", "bad_layer", P, "BASE coder 5 at q = 1 whose ranked depth's weight is 17 (above 16)", ["8.6", "13"],
+    ("neg-base-coder-removed", "bad_layer", P, "BASE coder 3 (a ranked octree coder of versions before 0.25) over a payload that decodes as coder 5", ["8", "13", "15"],
+     lambda: stream_q1(b"\x03" + base_ranked_payload(rand_pts(60, 3, 5), 3, 4, [True] * 3)[1:], counts=(60,), q=3)),
+    ("neg-base-far-weight", "bad_layer", P, "BASE coder 5 at q = 1 whose ranked depth's weight is 17 (above 16)", ["8.2", "13"],
      lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(1, 1), bw.put(17, 5), bw.put(0, 1),
                                                             bw.put(0, 1), write_table(bw, 255, lengths={0: 1, 1: 1}), bw.put(0, 1))))),
-    ("neg-base-paired-single", "bad_layer", P, "BASE coder 4 at q = 1 whose ranked depth's paired table has a one-symbol pair code (pairs would cost no bits)", ["7.4", "8.5", "13"],
-     lambda: stream_q1(b"\x04" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 4), bw.put(0, 1),
+    ("neg-base-paired-single", "bad_layer", P, "BASE coder 5 at q = 1 whose ranked depth's paired table has a one-symbol pair code (pairs would cost no bits)", ["7.4", "8.2", "13"],
+     lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 5), bw.put(0, 1),
                                                             bw.put(1, 1), bw.put(1, 1), bw.put(0, 7))))),
-    ("neg-base-causal-cut", "bad_layer", P, "BASE coder 3 at q = 2 whose payload ends just before the quadric flag of its ranked depth 1 (depth 0 plain, its table 28 bits in the 4-bit form: 40 bits in all)", ["8.4", "13"],
-     lambda: stream_q1(b"\x03" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(0, 1), write_table(bw, 256, lengths={0: 1, 1: 1}), bw.put(1, 1), bw.put(5, 4))), q=2)),
-    ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 1: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],
-     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(1, 1), write_table(bw, 256, single=255))))),
-    ("neg-base-ranked-single", "bad_layer", P, "BASE coder 1: a one-symbol code at a ranked depth (a 125-byte stream that would ask for 5.5 million nearest-neighbour searches)", ["8.2", "14", "13"],
-     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), [(bw.put(1, 1), write_table(bw, 255, single=(254 if d < 6 else 0))) for d in range(21)])), counts=(1 << 18,), q=21)),
-    ("neg-base-ranked-zero", "bad_layer", P, "BASE coder 1: occupancy 0 at a plain depth", ["8.2", "13"],
-     lambda: stream_q1(b"\x01" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), write_table(bw, 256, single=0))))),
-    ("neg-base-ranked-overrun", "bad_layer", P, "BASE coder 1: the bit stream ends inside a code", ["7.3", "8.2", "13"],
+    ("neg-base-causal-cut", "bad_layer", P, "BASE coder 5 at q = 2 whose payload ends after the weight of its ranked depth 1, inside its flags and tables (depth 0 plain, its table 28 bits in the 4-bit form: 42 bits and 6 of padding)", ["8.2", "13"],
+     lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 1), write_table(bw, 256, lengths={0: 1, 1: 1}), bw.put(1, 1), bw.put(5, 5))), q=2)),
+    ("neg-base-ranked-table", "bad_huffman_table", P, "BASE coder 5: a ranked depth's one-symbol table names symbol 255 (A = 255)", ["7.1", "8.2", "13"],
+     lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 5), bw.put(0, 1), bw.put(0, 1),
+                                                            write_table(bw, 256, single=255))))),
+    ("neg-base-ranked-single", "bad_layer", P, "BASE coder 5: a one-symbol code at a ranked depth (a 150-byte stream that would ask for 5.5 million nearest-neighbour searches)", ["8.2", "14", "13"],
+     lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(10, 4), bw.put(0, 2), [(bw.put(1, 1), bw.put(0, 5), bw.put(0, 1), bw.put(0, 1),
+                                                                                          write_table(bw, 255, single=(254 if d < 6 else 0))) for d in range(21)])), counts=(1 << 18,), q=21)),
+    ("neg-base-ranked-zero", "bad_layer", P, "BASE coder 5: occupancy 0 at a plain depth", ["8.2", "13"],
+     lambda: stream_q1(b"\x05" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 1), write_table(bw, 256, single=0))))),
+    ("neg-base-ranked-overrun", "bad_layer", P, "BASE coder 5: the bit stream ends inside a code", ["7.3", "8.2", "13"],
      lambda: stream_q1(base_ranked_payload(rand_pts(60, 3, 5), 3, 4, [True] * 3)[:-2], counts=(60,), q=3)),
-    ("neg-base-ranked-count", "bad_layer", P, "BASE coder 1 codes 60 points, HEAD declares 59", ["8.2", "13"],
+    ("neg-base-ranked-count", "bad_layer", P, "BASE coder 5 codes 60 points, HEAD declares 59", ["8.2", "13"],
      lambda: stream_q1(base_ranked_payload(rand_pts(60, 3, 5), 3, 4, [True] * 3), counts=(59,), q=3)),
     ("neg-base-zero-occupancy", "bad_layer", P, "occupancy 0 (single-symbol table)", ["8.1", "13"],
      lambda: stream_q1(b"\x00" + bits_payload(lambda bw: write_table(bw, 256, single=0)))),
@@ -2006,18 +2000,21 @@ NEGATIVE = [
      lambda: stream_q1(base_payload(rand_pts(60, 3, 5), 3)[:-2], counts=(60,), q=3)),
     ("neg-refn-coder", "bad_layer", P, "REFN coder 8", ["8A", "13"],
      lambda: stream_q1_refn(b"\x08" + refn_single(0)[1:])),
-    ("neg-refn-far-weight", "bad_layer", P, "REFN coder 7 at q = 1 whose one weight is 17 (above 16)", ["8A.8", "13"],
+    ("neg-refn-coder-removed", "bad_layer", P, "REFN coder 6 (a conditional octree coder of versions before 0.25) over a payload that decodes as coder 7", ["8A", "13", "15"],
+     lambda: stream_q1_refn(b"\x06" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(0, 1),
+                                                                 bw.put(0, 5), bw.put(1, 1), bw.put(0, 1), bw.put(1, 1), bw.put(7, 8))))),
+    ("neg-refn-far-weight", "bad_layer", P, "REFN coder 7 at q = 1 whose one weight is 17 (above 16)", ["8A.1", "13"],
      lambda: stream_q1_refn(b"\x07" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(0, 1),
                                                                  bw.put(17, 5), bw.put(1, 1), bw.put(0, 1), bw.put(1, 1), bw.put(1, 8))))),
-    ("neg-refn-paired-cut", "bad_layer", P, "REFN coder 6 whose payload ends inside the escape code of a paired table (its pair code can give the escape)", ["7.4", "8A.7", "13"],
-     lambda: stream_q1_refn(b"\x06" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(0, 1),
-                                                                 bw.put(0, 4), bw.put(1, 1), bw.put(1, 1), bw.put(1, 1), bw.put(64, 7), bw.put(0, 1))))),
-    ("neg-refn-quadric-cut", "bad_layer", P, "REFN coder 5 whose payload ends inside the fit field (one data byte: neighbours, classes, planes and one bit of F)", ["8A.6", "13"],
-     lambda: stream_q1_refn(b"\x05" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1))))),
-    ("neg-refn-depth-gaps-cut", "bad_layer", P, "REFN coder 4 at q = 1 whose payload ends inside the weight of depth 0 (one data byte: neighbours, classes, planes and one bit of G_0)", ["8A.5", "13"],
-     lambda: stream_q1_refn(b"\x04" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1))))),
-    ("neg-refn-gap-header-cut", "bad_layer", P, "REFN coder 3 whose payload ends inside the gap field (one data byte: neighbours, classes, planes and one bit of G)", ["8A.4", "13"],
-     lambda: stream_q1_refn(b"\x03" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 1))))),
+    ("neg-refn-paired-cut", "bad_layer", P, "REFN coder 7 whose payload ends inside the escape code of a paired table (its pair code can give the escape)", ["7.4", "8A.1", "13"],
+     lambda: stream_q1_refn(b"\x07" + bits_payload(lambda bw: (bw.put(1, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(0, 1),
+                                                                 bw.put(0, 5), bw.put(1, 1), bw.put(1, 1), bw.put(1, 1), bw.put(64, 7), bw.put(0, 1))))),
+    ("neg-refn-quadric-cut", "bad_layer", P, "REFN coder 7 whose payload ends inside the fit field (one data byte: neighbours, classes, planes and one bit of F)", ["8A.1", "13"],
+     lambda: stream_q1_refn(b"\x07" + bits_payload(lambda bw: (bw.put(4, 4), bw.put(0, 2), bw.put(0, 1), bw.put(1, 1))))),
+    ("neg-refn-depth-gaps-cut", "bad_layer", P, "REFN coder 7 at q = 1 whose payload ends inside the weight of depth 0 (two data bytes: neighbours, classes, planes, F, the per-depth flag and four bits of G_0)", ["8A.1", "13"],
+     lambda: stream_q1_refn(b"\x07" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(0, 1), bw.put(0, 4), bw.put(1, 1), bw.put(0, 4))))),
+    ("neg-refn-gap-header-cut", "bad_layer", P, "REFN coder 7 whose payload ends inside its one weight (two data bytes: neighbours, classes, planes, F, the flag and four bits of G)", ["8A.1", "13"],
+     lambda: stream_q1_refn(b"\x07" + bits_payload(lambda bw: (bw.put(0, 4), bw.put(0, 2), bw.put(1, 1), bw.put(0, 4), bw.put(0, 1), bw.put(0, 4))))),
     ("neg-vq-no-vqtb", "bad_layer", P, "a REFN of coder 1 in a stream without VQTB", ["8A.2", "13"],
      lambda: vq_neg(drop_vqtb=True)),
     ("neg-vq-anchor-range", "bad_layer", P, "coder 1: an anchor equal to the number of coarse points", ["8A.2", "13"],

@@ -206,8 +206,8 @@ class PairedCode:
 
 
 def read_table(br, alphabet, form, flagged):
-    """A table of a layer whose tables may be paired (`flagged`: §8.5,
-    §8A.7): a flag, then a paired table (§7.4) or a code-length table;
+    """A table of a layer whose tables may be paired (`flagged`: §8.2,
+    §8A.1): a flag, then a paired table (§7.4) or a code-length table;
     otherwise a code-length table (§7.1)."""
     if flagged and br.bits(1) == 1:
         return PairedCode(br, alphabet, form)
@@ -292,7 +292,7 @@ def morton_children(node, d, q):
 
 
 def causal_points(nodes, occs, i, nb, neighbours, h):
-    """§8.4: the points that rank node i of a depth (doubled coordinates;
+    """§8.2: the points that rank node i of a depth (doubled coordinates;
     nb searches the depth's node centres, h is the node side): its
     neighbours' centres, those decoded before it (index below i, whose
     occupancies occs[j] are known) replaced by their occupied children's
@@ -312,23 +312,23 @@ def causal_points(nodes, occs, i, nb, neighbours, h):
 def decode_base(payload, q, n, form=1):
     if not payload:
         raise DecodeError("bad_layer", "BASE: empty payload")
-    if payload[0] not in (0, 1, 2, 3, 4, 5):
+    if payload[0] not in (0, 5):  # §8: coder 0, the octree; coder 5, the ranked octree
         raise DecodeError("bad_layer", "BASE: unknown coder %d" % payload[0])
-    coder = payload[0]
+    ranked_coder = payload[0] == 5
     br = BitReader(payload, 1, "bad_layer", "BASE")
-    neighbours = br.bits(4) if coder >= 1 else 0
-    classes = br.bits(2) + 1 if coder >= 1 else 1
+    neighbours = br.bits(4) if ranked_coder else 0
+    classes = br.bits(2) + 1 if ranked_coder else 1
     ranked, tables, gaps, quadric = [], [], [], []
     for _ in range(q):
-        ranked.append(coder >= 1 and br.bits(1) == 1)
-        # §8.3: the depth's gap weight; §8.6: 5 bits, 16 the far ranking
-        gaps.append(br.bits(5 if coder == 5 else 4) if ranked[-1] and coder >= 2 else 0)
+        ranked.append(ranked_coder and br.bits(1) == 1)
+        # §8.2: the depth's 5-bit weight (16 the far ranking) and quadric flag
+        gaps.append(br.bits(5) if ranked[-1] else 0)
         if gaps[-1] > 16:
             raise DecodeError("bad_layer", "BASE: ranking weight %d above 16" % gaps[-1])
-        quadric.append(br.bits(1) == 1 if ranked[-1] and coder >= 3 else False)  # §8.4
-        tables.append([read_table(br, 255, form, coder >= 4) for _ in range(classes)] if ranked[-1]
-                      else [read_table(br, 256, form, coder >= 4)])
-        # §8.2: every ranked node costs a bit; §8.5: every pair of them when paired
+        quadric.append(br.bits(1) == 1 if ranked[-1] else False)
+        tables.append([read_table(br, 255, form, True) for _ in range(classes)] if ranked[-1]
+                      else [read_table(br, 256, form, ranked_coder)])
+        # §8.2: every ranked node costs a bit, every pair of them when paired
         if ranked[-1] and any((t.pairs if isinstance(t, PairedCode) else t).single is not None for t in tables[-1]):
             raise DecodeError("bad_layer", "BASE: a one-symbol code at ranked depth %d" % (len(tables) - 1))
     nodes = [(0, 0, 0)]
@@ -341,15 +341,10 @@ def decode_base(payload, q, n, form=1):
             nb = Neighbours(centres, q)
         occs = []
         for i, (X, Y, Z) in enumerate(nodes):
-            if ranked[d] and coder >= 3:
+            if ranked[d]:
                 P = causal_points(nodes, occs, i, nb, neighbours, h)
                 pi, split = child_order((X, Y, Z), d, q, 0, None, None, 0, want_split=True, gap=gaps[d], gap_from=1,
                                         fit=len(P) if quadric[d] else 0, points=P)
-            elif ranked[d]:
-                # §8.3: g over the neighbours other than the node itself
-                pi, split = child_order((X, Y, Z), d, q, 0, centres, nb, neighbours, want_split=True, gap=gaps[d],
-                                        gap_from=1)
-            if ranked[d]:
                 x = (0, 1, 2, 2, 3)[split]
                 s = t[min(x, classes - 1)].decode(br, "bad_layer")
                 rho = E[s]
@@ -458,7 +453,7 @@ def ring(cx, cy, cz, r):
 
 
 def quadric_keys(n, j, O, F, h, k):
-    """§8A.6: the keys t'_c of the eight children from the quadric fitted
+    """§8A.1: the keys t'_c of the eight children from the quadric fitted
     to the fit points F (doubled coordinates), or None when the fit fails.
     Python floats are IEEE binary64; each operation below is rounded on its
     own, in the spec's order."""
@@ -521,12 +516,12 @@ def quadric_keys(n, j, O, F, h, k):
 def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, gap_from=0, fit=0, points=None):
     """§8A.1 ranking: returns pi, pi[r] = child at rank r (and, with
     want_split, how many children lie on the plane's smaller side, §8.2).
-    gap: coder 3's weight G (§8A.4); 0 is the ranking of §8A.1. gap_from:
-    the distances g skip the first gap_from neighbours (§8.3: the node itself).
-    fit: coder 5's F (§8A.6), the points the quadric is fitted to.
-    gap 16: coder 7's far ranking (§8A.8) and BASE coder 5's (§8.6), by g
+    gap: the gap weight G (§8A.1); 0 is the plain ranking. gap_from:
+    the distances g skip the first gap_from neighbours (§8.2: the node itself).
+    fit: the quadric's F (§8A.1), the points the quadric is fitted to.
+    gap 16: the far ranking (§8A.1, and BASE coder 5's, §8.2), by g
     alone, farthest first.
-    points: the neighbours themselves (§8.4), instead of a search in coarse;
+    points: the neighbours themselves (§8.2), instead of a search in coarse;
     the first `fit` of them are the fit points."""
     X, Y, Z = node
     h = 1 << (q - d)
@@ -578,11 +573,11 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
         above += dot > 0
         below += dot < 0
         e = V[0] * V[0] + V[1] * V[1] + V[2] * V[2]
-        t = abs(dot) if quadric is None else quadric[c]  # §8A.6: the height above the quadric
-        # §8A.4: kappa = 32 t^2 - G k^2 N g, g the squared distance from U to
+        t = abs(dot) if quadric is None else quadric[c]  # §8A.1: the height above the quadric
+        # §8A.1: kappa = 32 t^2 - G k^2 N g, g the squared distance from U to
         # the nearest neighbour (0 without neighbours)
         g = min((sum((U[a] - p[a]) ** 2 for a in range(3)) for p in P[gap_from:]), default=0)
-        kappa = -g if gap == 16 else 32 * t * t - gap * k * k * N * g  # §8A.8: far ranking
+        kappa = -g if gap == 16 else 32 * t * t - gap * k * k * N * g  # §8A.1: far ranking
         keys.append((1 - (m >> c & 1), kappa, t, e, c))
     keys.sort()
     pi = [key[4] for key in keys]
@@ -596,23 +591,20 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         raise DecodeError("bad_layer", "REFN: empty payload")
     if payload[0] == 1:
         return decode_vq(payload, q, coarse, n, codebook, form)
-    if payload[0] not in (0, 2, 3, 4, 5, 6, 7):
+    if payload[0] not in (0, 7):  # §8A.1: the short header (0) and the full one (7)
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
-    planes = 2 if payload[0] == 2 else 1  # §8A.3: coder 2 adds the plane context
+    full = payload[0] == 7
+    planes = 1
     br = BitReader(payload, 1, "bad_layer", "REFN")
     neighbours = br.bits(4)
     classes = br.bits(2) + 1
     gaps = [0] * q
     fit = 0
-    if payload[0] in (3, 4, 5, 6, 7):  # §8A.4: the plane contexts and the gap weight; §8A.5: one per depth
+    if full:  # the plane contexts, the quadric's fit points, then one 5-bit weight or one per depth
         planes = br.bits(1) + 1
-        if payload[0] in (5, 6, 7):  # §8A.6-§8A.8: the quadric's fit points, then one weight or one per depth
-            fit = br.bits(4)
-            per_depth = br.bits(1) == 1
-        else:
-            per_depth = payload[0] == 4
-        width = 5 if payload[0] == 7 else 4  # §8A.8: 5-bit weights, 16 the far ranking
-        gaps = [br.bits(width) for _ in range(q)] if per_depth else [br.bits(width)] * q
+        fit = br.bits(4)
+        per_depth = br.bits(1) == 1
+        gaps = [br.bits(5) for _ in range(q)] if per_depth else [br.bits(5)] * q
         if max(gaps) > 16:
             raise DecodeError("bad_layer", "REFN: ranking weight %d above 16" % max(gaps))
     table = [[[None] * planes for _ in range(classes)] for _ in range(q)]
@@ -620,7 +612,7 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
         for j in range(classes):
             for x in range(planes):
                 if br.bits(1) == 1:
-                    table[d][j][x] = read_table(br, 255, form, payload[0] in (6, 7))
+                    table[d][j][x] = read_table(br, 255, form, full)
                 elif d > 0:
                     table[d][j][x] = table[d - 1][j][x]
     # Occupied nodes of C per depth.

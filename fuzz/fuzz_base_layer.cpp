@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 // Fuzz target: the base-layer coders (decode_base: plain octree, coder 0,
-// and the ranked octrees, coders 1-5) on arbitrary bits.
+// and the ranked octree, coder 5) on arbitrary bits.
 //
 // Input: u8 q (mapped to 1..21), u24 point count minus one (low 18 bits:
 // at most 2^18 points, the decode target's limit), then the BASE payload

@@ -4,16 +4,14 @@
 //
 // Input: u8 q (mapped to 1..21), u8 coarse count c (1..64), c points of
 // 3 x u24 (masked to the grid), u16 added count n (1..4096), u8 coder (its
-// value mod 7: 0 coder 0, 1 coder 2 with plane contexts, 2 coder 3 with plane
-// contexts and gap ranking, 3 coder 4 with a gap weight per depth, 4 coder 5
-// with quadric ranking, 5 coder 6 with paired tables, 6 coder 7 with far
-// ranking), then the REFN bit
+// value mod 2: 0 coder 0, the short header; 1 coder 7, the full header with
+// plane contexts, the quadric, gap weights, far ranking and paired tables),
+// then the REFN bit
 // stream (without its coder byte). Checks: only bad_layer /
 // bad_huffman_table are raised; a decoded layer has exactly n distinct new
 // points on the grid, none in the coarser level, in canonical order; coding
 // them again decodes to the same points.
 #include <algorithm>
-#include <array>
 #include <vector>
 
 #include "fuzz_check.hpp"
@@ -25,10 +23,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   int q = 0;
   const std::vector<hmc::GridPoint> coarse = hmc_fuzz::read_coarse_level(params, q);
   const std::uint64_t n = 1 + params.u16() % 4096;
-  const hmc::detail::OctreeCoder coder = std::array<hmc::detail::OctreeCoder, 7>{
-      hmc::detail::OctreeCoder::plain,      hmc::detail::OctreeCoder::planes,  hmc::detail::OctreeCoder::gap,
-      hmc::detail::OctreeCoder::depth_gaps, hmc::detail::OctreeCoder::quadric, hmc::detail::OctreeCoder::paired,
-      hmc::detail::OctreeCoder::far}[params.u8() % 7];
+  // The two headers of the conditional octree (spec 8A.1): coder 0 and 7.
+  const hmc::detail::RefineCoder coder = params.u8() % 2 ? hmc::detail::RefineCoder::ranked_octree
+                                                         : hmc::detail::RefineCoder::conditional_octree;
 
   std::vector<hmc::GridPoint> added;
   try {
@@ -46,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     back = hmc::detail::decode_refinement(again.bytes.data(), again.bytes.size(), q, coarse, n,
                                           hmc::detail::TableForm::deltas,
-                                          static_cast<hmc::detail::OctreeCoder>(again.coder));
+                                          static_cast<hmc::detail::RefineCoder>(again.coder));
   } catch (const hmc::detail::StreamError& e) {
     FUZZ_CHECK(false, "a re-encoded layer does not decode: %s", e.what());
   }

@@ -298,8 +298,8 @@ for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
         if len(coarse) > 64:
             continue
         common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
-        if refn[0][0] in (0, 2, 3, 4, 5, 6, 7):  # the target's coder byte mod 7: 0 coder 0, 1 coder 2, 2 coder 3,
-            coder = bytes([{0: 0, 2: 1, 3: 2, 4: 3, 5: 4, 6: 5, 7: 6}[refn[0][0]]])  # 3 coder 4, ..., 6 coder 7
+        if refn[0][0] in (0, 7):  # the target's coder byte mod 2: 0 coder 0, 1 coder 7
+            coder = bytes([{0: 0, 7: 1}[refn[0][0]]])
             put("refine_layer", name, common + (n - 1).to_bytes(2, "little") + coder + refn[0][1:])
         else:
             vqtb = next(p for t, p in cs if t == "VQTB")
@@ -317,8 +317,8 @@ for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
         if 4 <= len(pts) <= 40:
             put("recon", name, bytes([1 if kind == 2 else 0, len(pts) - 4]) + bytes(v for p in pts for v in p) + rcon[-1])
 
-# Coders 6 (paired tables) and 7 (far ranking) from the conformance
-# vectors: the small samples' layers do not use them.
+# Coder 7 with paired tables and far ranking from the conformance vectors:
+# the small samples' layers do not use them.
 for case in ("refn-paired-escapes", "refn-paired-single", "refn-far-lattice"):
     folder = os.path.join(root, "conformance", "vectors", case)
     with open(os.path.join(folder, "stream.hmc"), "rb") as f:
@@ -329,7 +329,7 @@ for case in ("refn-paired-escapes", "refn-paired-single", "refn-far-lattice"):
     coarse = dump_points(os.path.join(folder, "expected", "level-%d.points" % (levels - 1)))
     fine = dump_points(os.path.join(folder, "expected", "level-%d.points" % (levels - 2)))
     common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
-    coder = bytes([{6: 5, 7: 6}[refn[0][0]]])
+    coder = bytes([{0: 0, 7: 1}[refn[0][0]]])
     put("refine_layer", case, common + (len(fine) - len(coarse) - 1).to_bytes(2, "little") + coder + refn[0][1:])
 
 # A class list (RCON flag bit 4) over 30 points of a sphere: K = 3 around

@@ -56,11 +56,10 @@ TEST_CASE("enc, info and dec round trip through files, with matching canonical d
   CHECK(r.out.find("\"points\": 1800") != std::string::npos);
   CHECK(r.out.find("\"kind\": \"surface\"") != std::string::npos);
   // The base layer's coder is named from its payload (the encoder writes
-  // the octree or the ranked octree with causal points).
+  // the octree or the ranked octree).
   const bool named =
       r.out.find("\"coder\": 0, \"coder_name\": \"octree\"") != std::string::npos ||
-      r.out.find("\"coder\": 3, \"coder_name\": \"ranked octree, causal points\"") != std::string::npos ||
-      r.out.find("\"coder\": 4, \"coder_name\": \"ranked octree, causal points, paired tables\"") != std::string::npos;
+      r.out.find("\"coder\": 5, \"coder_name\": \"ranked octree\"") != std::string::npos;
   CHECK(named);
 
   // --fast-decode: the plain octree, the same points.

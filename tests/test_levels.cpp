@@ -272,9 +272,26 @@ TEST_CASE("stream structure errors around refinement layers") {
   c.insert(c.end() - 1, c[refn]);  // an extra REFN beyond the declared levels
   c.insert(c.end() - 1, c[refn + 1]);
   CHECK(status(c) == Status::bad_chunk);
-  c = chunks;
-  c[refn].second[0] = 8;  // unknown refinement coder
-  CHECK(status(c) == Status::bad_layer);
+  // Unknown refinement coders, among them those that spec 0.25 removed (2-6);
+  // the same for the base layer (removed: 1-4).
+  for (const int coder : {2, 3, 4, 5, 6, 8, 255}) {
+    CAPTURE(coder);
+    c = chunks;
+    c[refn].second[0] = static_cast<std::uint8_t>(coder);
+    CHECK(status(c) == Status::bad_layer);
+  }
+  for (std::size_t i = 0; i < chunks.size(); ++i) {
+    if (chunks[i].first != kBaseLayer) continue;
+    for (const int coder : {1, 2, 3, 4, 6, 255}) {
+      CAPTURE(coder);
+      c = chunks;
+      c[i].second[0] = static_cast<std::uint8_t>(coder);
+      const auto b = build(c);
+      const auto d = decode(b.data(), b.size());
+      CHECK(d.status() == Status::bad_layer);
+      CHECK(d.error().message.find("unknown coder") != std::string::npos);
+    }
+  }
   c = chunks;
   c[refn].second.push_back(0);  // trailing byte in the layer
   CHECK(status(c) != Status::ok);
@@ -306,7 +323,7 @@ TEST_CASE("fast_decode: plain octrees without neighbours, the same levels, a lar
   MESSAGE("4-level torus: ", e.bytes.size(), " bytes with fast_decode, ", small.value().bytes.size(), " without");
   CHECK(e.bytes.size() > small.value().bytes.size());
   // BASE coder 0; every REFN with neighbours 0 (the first 4 bits of coders
-  // 0, 2-6 after the coder byte).
+  // 0 and 7 after the coder byte).
   const ContainerView v = parse_container(e.bytes.data(), e.bytes.size(), kEnd);
   int layers = 0;
   for (const ChunkView& c : v.chunks) {

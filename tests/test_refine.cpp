@@ -72,8 +72,8 @@ struct Split {
 
 // `bytes` decode to the added points as coder `right`; read as coder
 // `wrong`, whose header differs, they fail or give another set.
-void check_coders(const std::vector<std::uint8_t>& bytes, const Split& s, int q, OctreeCoder right,
-                  OctreeCoder wrong) {
+void check_coders(const std::vector<std::uint8_t>& bytes, const Split& s, int q, RefineCoder right,
+                  RefineCoder wrong) {
   CHECK(decode_refinement(bytes.data(), bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas, right) ==
         sorted(s.added));
   Points other;
@@ -534,6 +534,17 @@ TEST_CASE("malformed refinement streams are rejected, never misread") {
   }
 }
 
+// Whether a BASE payload, its coder byte replaced by `coder`, decodes to
+// `points` (false when it fails).
+bool decodes_as(std::vector<std::uint8_t> base, std::uint8_t coder, int q, const Points& points) {
+  base[0] = coder;
+  try {
+    return decode_base(base.data(), base.size(), q, points.size()) == points;
+  } catch (const StreamError&) {
+    return false;
+  }
+}
+
 TEST_CASE("base layer on two threads: the same stream and the same points") {
   // With a helper free, the encoder ranks half of each depth of 4,096 nodes
   // or more on it, and the decoder searches the nearest nodes of each depth
@@ -544,22 +555,19 @@ TEST_CASE("base layer on two threads: the same stream and the same points") {
   sphere.erase(std::unique(sphere.begin(), sphere.end()), sphere.end());
   REQUIRE(sphere.size() > 8192);
   HelperBudget two(2);
-  for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{5}}) {
-    CAPTURE(int(coder));
-    const auto one = encode_base(sphere, 12, coder);
-    REQUIRE(one[0] != 0);  // ranked
-    CHECK(encode_base(sphere, 12, coder, &two) == one);
-    CHECK(decode_base(one.data(), one.size(), 12, sphere.size(), TableForm::deltas, &two) == sphere);
-  }
+  const auto one = encode_base(sphere, 12);
+  REQUIRE(one[0] == 5);  // ranked
+  CHECK(encode_base(sphere, 12, BaseCoder::ranked, &two) == one);
+  CHECK(decode_base(one.data(), one.size(), 12, sphere.size(), TableForm::deltas, &two) == sphere);
 }
 
-TEST_CASE("base layer: the ranked octree (coders 2-5) codes surfaces smaller and decodes every set exactly") {
+TEST_CASE("base layer: the ranked octree (coder 5) codes surfaces smaller and decodes every set exactly") {
   // A sampled surface: the plane through the neighbouring node centres
   // predicts the children, so the ranked coder is chosen and is smaller.
   const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
   const auto base = encode_base(sphere, 12);
   REQUIRE(!base.empty());
-  CHECK((base[0] == 3 || base[0] == 4));
+  CHECK(base[0] == 5);
   const auto plain = encode_octree(sphere, 12);
   CHECK(base.size() < plain.size() + 1);
   Points sorted = sphere;
@@ -573,9 +581,9 @@ TEST_CASE("base layer: the ranked octree (coders 2-5) codes surfaces smaller and
       Points p = quantize(m, q);
       sort_canonical(p);
       p.erase(std::unique(p.begin(), p.end()), p.end());
-      for (const std::uint8_t coder : {std::uint8_t{2}, std::uint8_t{3}, std::uint8_t{4}, std::uint8_t{5}}) {
+      for (const BaseCoder coder : {BaseCoder::octree, BaseCoder::ranked}) {
         const auto b = encode_base(p, q, coder);
-        CHECK((b[0] == 0 || b[0] == coder || (coder >= 4 && b[0] >= 3 && b[0] <= coder)));
+        CHECK((b[0] == 0 || b[0] == static_cast<std::uint8_t>(coder)));
         CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
       }
     }
@@ -583,29 +591,24 @@ TEST_CASE("base layer: the ranked octree (coders 2-5) codes surfaces smaller and
   // A single point gains nothing from ranking: coder 0.
   const Points one{{5, 6, 7}};
   CHECK(encode_base(one, 4)[0] == 0);
-  // Unknown coder, empty payload, a wrong count.
+  // Unknown coders (1-4 were removed in spec 0.25), empty payload, a wrong
+  // count. A coder-5 stream relabelled as a removed coder is refused.
+  for (const int coder : {1, 2, 3, 4, 6, 255}) {
+    CAPTURE(coder);
+    const std::uint8_t unknown[] = {static_cast<std::uint8_t>(coder), 0};
+    CHECK(status_of([&] { decode_base(unknown, 2, 4, 1); }) == Status::bad_layer);
+    CHECK_FALSE(decodes_as(base, static_cast<std::uint8_t>(coder), 12, sorted));
+  }
   const std::uint8_t four[] = {4, 0};
-  CHECK(status_of([&] { decode_base(four, 2, 4, 1); }) == Status::bad_layer);
   CHECK(status_of([&] { decode_base(four, 0, 4, 1); }) == Status::bad_layer);
-  CHECK(status_of([&] { encode_base(sphere, 12, 1); }) == Status::invalid_argument);
+  CHECK(status_of([&] { encode_base(sphere, 12, static_cast<BaseCoder>(1)); }) == Status::invalid_argument);
   CHECK(status_of([&] { decode_base(base.data(), base.size(), 12, sorted.size() - 1); }) == Status::bad_layer);
   CHECK(status_of([&] { decode_base(base.data(), base.size() - 1, 12, sorted.size()); }) == Status::bad_layer);
 }
 
-// Whether a BASE payload, its coder byte replaced by `coder`, decodes to
-// `points` (false when it fails).
-bool decodes_as(std::vector<std::uint8_t> base, std::uint8_t coder, int q, const Points& points) {
-  base[0] = coder;
-  try {
-    return decode_base(base.data(), base.size(), q, points.size()) == points;
-  } catch (const StreamError&) {
-    return false;
-  }
-}
-
-// A ranked depth's header fields in a BASE payload of coder 2, 3 or 4
-// (spec 8.3-8.5): whether it is ranked, its weight, its quadric flag and
-// how many of its tables are paired.
+// A ranked depth's header fields in a BASE payload of coder 5 (spec 8.2):
+// whether it is ranked, its weight, its quadric flag and how many of its
+// tables are paired.
 struct RankedDepth {
   bool ranked = false;
   int gap = 0;
@@ -613,17 +616,17 @@ struct RankedDepth {
   int paired = 0;
 };
 std::vector<RankedDepth> ranked_depths(const std::vector<std::uint8_t>& base, int q) {
-  REQUIRE((base[0] >= 2 && base[0] <= 5));
+  REQUIRE(base[0] == 5);
   BitReader in(base.data() + 1, base.size() - 1, "test");
   in.get(4);
   const int classes = static_cast<int>(in.get(2)) + 1;
   std::vector<RankedDepth> out(static_cast<std::size_t>(q));
   for (auto& d : out) {
     d.ranked = in.get(1) == 1;
-    if (d.ranked) d.gap = static_cast<int>(in.get(base[0] == 5 ? 5 : 4));
-    if (d.ranked && base[0] >= 3) d.quadric = in.get(1) == 1;
+    if (d.ranked) d.gap = static_cast<int>(in.get(5));
+    if (d.ranked) d.quadric = in.get(1) == 1;
     for (int j = 0; j < (d.ranked ? classes : 1); ++j)
-      d.paired += TableCode::read(in, d.ranked ? 255 : 256, base[0] >= 4, "test", TableForm::deltas).paired();
+      d.paired += TableCode::read(in, d.ranked ? 255 : 256, true, "test", TableForm::deltas).paired();
   }
   return out;
 }
@@ -653,27 +656,24 @@ Points evenly_spread(const Points& candidates, std::int64_t r) {
   return even;
 }
 
-TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before, and by a quadric where it pays") {
+TEST_CASE("base layer: coder 5 ranks by the children of the nodes decoded before, and by a quadric where it pays") {
   // On sampled curved surfaces the occupied children of the neighbouring
-  // nodes already decoded locate the sheet twice as finely as their centres:
-  // coder 3 must beat coder 2 clearly, and choose the quadric at some depth.
+  // nodes already decoded locate the sheet twice as finely as their centres,
+  // and the quadric through them follows the curve: coder 5 chooses it at
+  // some depth, the plane at others.
   for (const auto& mesh : {samples::torus(160, 60, 1.0, 0.2), samples::uv_sphere(80, 120)}) {
     const Points pts = quantize(mesh, 12);
     Points sorted = pts;
     sort_canonical(sorted);
     sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-    const auto two = encode_base(pts, 12, 2), three = encode_base(pts, 12, 3);
-    REQUIRE(two[0] == 2);
-    REQUIRE(three[0] == 3);
-    MESSAGE(sorted.size() << " points: coder 2 " << two.size() << " bytes, coder 3 " << three.size());
-    CHECK(100 * three.size() < 97 * two.size());
+    const auto three = encode_base(pts, 12), plain = encode_base(pts, 12, BaseCoder::octree);
+    REQUIRE(three[0] == 5);
+    MESSAGE(sorted.size() << " points: coder 0 " << plain.size() << " bytes, coder 5 " << three.size());
+    CHECK(100 * three.size() < 90 * plain.size());
     CHECK(decode_base(three.data(), three.size(), 12, sorted.size()) == sorted);
     const auto depths = ranked_depths(three, 12);
     CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.quadric; }));
     CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.ranked && !d.quadric; }));
-    // The flags and the causal points matter: read as coder 2 (no flags,
-    // node centres only), the stream fails or gives another set.
-    CHECK_FALSE(decodes_as(three, 2, 12, sorted));
   }
   // A depth of more than 16,384 nodes is first judged on a sample block of
   // its nodes (their causal points taken from the block's own slice of the
@@ -692,7 +692,7 @@ TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before
   // The points of a node are capped at 32: with 15 neighbours on a dense
   // lattice (up to 8 children each) the lists are cut, and the set still
   // comes back; the same at q = 21 with points at the grid's far corners
-  // (the bounds of spec 8.4).
+  // (the bounds of spec 8.2).
   Points lattice;
   for (std::uint32_t x = 0; x < 9; ++x)
     for (std::uint32_t y = 0; y < 9; ++y)
@@ -706,46 +706,34 @@ TEST_CASE("base layer: coder 3 ranks by the children of the nodes decoded before
       if (((g[0] | g[1] | g[2]) >> q) == 0) p.push_back(g);
     p = sorted(p);
     const auto b = encode_base(p, q);
-    CHECK((b[0] >= 3 && b[0] <= 5));
+    CHECK(b[0] == 5);
     CHECK(decode_base(b.data(), b.size(), q, p.size()) == p);
   }
 }
 
-TEST_CASE("base layer: coder 4 pairs the tables where that is smaller, and a ranked depth's pairs cost a bit") {
+TEST_CASE("base layer: coder 5 pairs the tables where that is smaller, and a ranked depth's pairs cost a bit") {
   // A sphere sampled evenly: deep depths where most nodes have one child,
   // the ranking's first most often.
   const Points pts = sorted(evenly_spread(quantize(samples::random_sphere_points(60000, 13), 12), 24));
-  const auto three = encode_base(pts, 12, 3), four = encode_base(pts, 12);
-  REQUIRE(three[0] == 3);
-  REQUIRE(four[0] == 4);
-  MESSAGE(pts.size() << " points: coder 3 " << three.size() << " bytes, coder 4 " << four.size());
-  CHECK(four.size() < three.size());
+  const auto four = encode_base(pts, 12);
+  REQUIRE(four[0] == 5);
   CHECK(decode_base(four.data(), four.size(), 12, pts.size()) == pts);
-  // The same rankings (weights and flags), some tables paired.
-  const auto d3 = ranked_depths(three, 12), d4 = ranked_depths(four, 12);
+  const auto d4 = ranked_depths(four, 12);
   int paired = 0;
-  for (int d = 0; d < 12; ++d) {
-    CAPTURE(d);
-    CHECK(d3[static_cast<std::size_t>(d)].ranked == d4[static_cast<std::size_t>(d)].ranked);
-    CHECK(d3[static_cast<std::size_t>(d)].gap == d4[static_cast<std::size_t>(d)].gap);
-    CHECK(d3[static_cast<std::size_t>(d)].quadric == d4[static_cast<std::size_t>(d)].quadric);
-    paired += d4[static_cast<std::size_t>(d)].paired;
-  }
+  for (const RankedDepth& d : d4) paired += d.paired;
   CHECK(paired > 0);
-  // Read as coder 3 (no flags), the stream fails or gives another set.
-  CHECK_FALSE(decodes_as(four, 3, 12, pts));
   // A ranked depth whose paired table's pair code is the one-symbol form:
   // pairs would cost nothing, so the stream is refused before any node.
   BitWriter w;
   w.put(1, 4);  // neighbours
   w.put(0, 2);  // one context
   w.put(1, 1);  // depth 0 ranked
-  w.put(0, 4);  // gap weight
+  w.put(0, 5);  // gap weight
   w.put(0, 1);  // no quadric
   w.put(1, 1);  // paired
   w.put(1, 1);  // pair code: one symbol,
   w.put(0, 7);  // the pair (0, 0)
-  std::vector<std::uint8_t> bad{4};
+  std::vector<std::uint8_t> bad{5};
   const auto bits = w.finish();
   bad.insert(bad.end(), bits.begin(), bits.end());
   CHECK(status_of([&] { decode_base(bad.data(), bad.size(), 1, 1); }) == Status::bad_layer);
@@ -755,26 +743,21 @@ TEST_CASE("base layer: coder 5 ranks the children of a volume's interior farthes
   // Points kept at least r apart filling a ball, as a tetrahedral mesh
   // spaces its interior: no plane passes through them, and at the depths of
   // one point per node the occupied child is the one far from the points
-  // known around it. Coder 5's weight 16 pays there (0.6 % on these
-  // points, 1.3 % on the one-level streams of the shared TetGen volumes).
+  // known around it. Coder 5's weight 16 pays there.
   const Points even = sorted(evenly_spread(quantize(samples::random_ball(20000, 17), 12), 150));
   REQUIRE(even.size() > 2000);
-  const auto four = encode_base(even, 12, 4), five = encode_base(even, 12);
-  REQUIRE((four[0] == 3 || four[0] == 4));
+  const auto five = encode_base(even, 12);
   REQUIRE(five[0] == 5);
-  MESSAGE(even.size() << " points: coder " << int{four[0]} << " " << four.size() << " bytes, coder 5 " << five.size());
-  CHECK(five.size() < four.size());
   CHECK(decode_base(five.data(), five.size(), 12, even.size()) == even);
   const auto depths = ranked_depths(five, 12);
   CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.gap == 16; }));
-  // Read as coder 4 (4-bit weights), the stream fails or gives another set.
-  CHECK_FALSE(decodes_as(five, 4, 12, even));
   // On a sampled surface the plane and the quadric rank better: no depth
-  // takes weight 16 there, so the encoder keeps coder 3 or 4.
+  // takes weight 16 there.
   const Points sphere = quantize(samples::uv_sphere(80, 120), 12);
   const auto surface = encode_base(sphere, 12);
-  CHECK((surface[0] == 3 || surface[0] == 4));
-  CHECK(surface == encode_base(sphere, 12, 4));
+  REQUIRE(surface[0] == 5);
+  const auto on_surface = ranked_depths(surface, 12);
+  CHECK(std::none_of(on_surface.begin(), on_surface.end(), [](const RankedDepth& d) { return d.gap == 16; }));
   // Weight 16 ranks by g alone, farthest first: node (0,0,0) at depth 1 of
   // q = 3 (centre 4,4,4; children's centres 2 or 6 per axis) and points
   // (1,1,1) and (1,3,7) beside children 0 and 1: child 6, (6,6,2), is the
@@ -804,7 +787,7 @@ TEST_CASE("base layer: coder 5 ranks the children of a volume's interior farthes
   }
 }
 
-TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and the node itself is not a gap") {
+TEST_CASE("base layer: gap weights win on evenly spread points, and the node itself is not a gap") {
   // Points kept at least r apart on a sphere, as a scan spaces them: at the
   // depths of one or two points per node, the occupied children lie far from
   // the neighbouring nodes' centres, and weights above 0 make the symbols
@@ -812,8 +795,8 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
   Points even = evenly_spread(quantize(samples::random_sphere_points(30000, 7), 12), 40);
   sort_canonical(even);
   REQUIRE(even.size() > 2000);
-  const auto base = encode_base(even, 12, 2);
-  CHECK(base[0] == 2);
+  const auto base = encode_base(even, 12);
+  CHECK(base[0] == 5);
   CHECK(decode_base(base.data(), base.size(), 12, even.size()) == even);
   const auto depths = ranked_depths(base, 12);
   CHECK(std::any_of(depths.begin(), depths.end(), [](const RankedDepth& d) { return d.gap > 0; }));
@@ -832,11 +815,11 @@ TEST_CASE("base layer: coder 2's gap weights win on evenly spread points, and th
   CHECK(all == plain);  // every child is equally far from the node's own centre
 }
 
-// ChildKeys packs each child's ranking key (spec 8A.1 step 5, 8A.4's kappa,
-// 8.4's gap skipping the node itself) into one integer; order() and
+// ChildKeys packs each child's ranking key (spec 8A.1 step 5, 8A.1's kappa,
+// 8.2's gap skipping the node itself) into one integer; order() and
 // symbol() must rank exactly as the keys compared one by one, up to the
 // largest magnitudes inputs reach (q = 21, 32 points, weight 15); so must
-// the far ranking (spec 8A.8, weight kFarRanking) by (mask, -g, t, e, c).
+// the far ranking (spec 8A.1, weight kFarRanking) by (mask, -g, t, e, c).
 TEST_CASE("ChildKeys ranks as the spec's keys, at the largest magnitudes too") {
   __extension__ typedef __int128 I128;
   // Spec 8A.1 "Reduction to B bits".
@@ -999,7 +982,7 @@ TEST_CASE("radix_sort, morton_point and sort_canonical agree with the plain defi
   }
 }
 
-TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the smaller coder") {
+TEST_CASE("plane contexts (coder 7) round trip, and the encoder keeps the smaller coder") {
   const int q = 12;
   const Points pts = quantize(samples::torus(40, 24), q);
   const Split s = split_random(pts, 0.3, 5);
@@ -1009,16 +992,16 @@ TEST_CASE("coder 2 (plane contexts) round trips, and the encoder keeps the small
       CAPTURE(classes);
       RefinementParams p = params(k, classes);
       p.plane_contexts = true;
-      // Read as coder 0, the slot flags and tables no longer line up.
-      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::planes, OctreeCoder::plain);
+      // Read as coder 0 (the short header), the slot flags and tables no longer line up.
+      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
     }
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  REQUIRE((layer.coder == 0 || layer.coder == 2 || layer.coder == 3 || layer.coder == 4 || layer.coder == 5));
+  REQUIRE((layer.coder == 0 || layer.coder == 7));
   const auto plain = encode_refinement(s.coarse, s.added, q);
   CHECK(layer.bytes.size() <= plain.size());
   if (layer.coder == 0) CHECK(layer.bytes == plain);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                          static_cast<OctreeCoder>(layer.coder)) == sorted(s.added));
+                          static_cast<RefineCoder>(layer.coder)) == sorted(s.added));
 }
 
 TEST_CASE("gap ranking: children far from every neighbour move up among those equally near the plane") {
@@ -1105,7 +1088,7 @@ std::size_t smallest_layer(const Split& s, int q, const std::vector<int>& gaps) 
 
 }  // namespace
 
-TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill the coarse level's gaps") {
+TEST_CASE("gap ranking (coder 7) round trips, and wins where added points fill the coarse level's gaps") {
   const int q = 12;
   const Split s = level_split(quantize(samples::random_sphere_points(12000, 29), q), 90);  // about 1,700 points
   for (int k : {0, 1, 4, 15})
@@ -1117,15 +1100,14 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
         RefinementParams p = params(k, 2);
         p.plane_contexts = planes;
         p.gap = gap;
-        // Read as coder 2, the header's planes and gap fields become slot flags.
-        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::gap, OctreeCoder::planes);
+        // Read as coder 0, the header's planes and gap fields become slot flags.
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
       }
-  // The best gap ranking (coder 3) is at least 2 % smaller than the best
-  // ranking without the gap term (coders 0 and 2, 4 neighbours); the
-  // encoder's choice, with a gap ranking (coder 3, 4, or 5 with its quadric),
-  // is no larger.
+  // The best gap ranking is at least 2 % smaller than the best ranking
+  // without the gap term (4 neighbours); the encoder's choice, with a gap
+  // ranking (coder 7), is no larger.
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  CHECK((layer.coder == 3 || layer.coder == 4 || layer.coder == 5));
+  CHECK(layer.coder == 7);
   const std::size_t without = smallest_layer(s, q, {0}), gapped = smallest_layer(s, q, {1, 2, 3, 4, 6, 8, 12});
   CAPTURE(without);
   CAPTURE(gapped);
@@ -1134,9 +1116,9 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
   CHECK(50 * gapped <= 49 * without);
   CHECK(layer.bytes.size() <= gapped);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                          static_cast<OctreeCoder>(layer.coder)) == sorted(s.added));
+                          static_cast<RefineCoder>(layer.coder)) == sorted(s.added));
 
-  // Coder 4: a weight per depth. Equal weights rank as coder 3 does; other
+  // A weight per depth. Equal weights rank as one weight does; other
   // weights give other symbols; every choice decodes.
   const auto depth_coded = [&](const std::vector<int>& gaps, bool planes) {
     RefinementParams p = params(4, 3);
@@ -1154,11 +1136,11 @@ TEST_CASE("coder 3 (gap ranking) round trips, and wins where added points fill t
       CAPTURE(planes);
       const auto bytes = depth_coded(gaps, planes);
       distinct.insert(bytes);
-      // Read as coder 3, the weights of depths 1 on become slot flags.
-      check_coders(bytes, s, q, OctreeCoder::depth_gaps, OctreeCoder::gap);
+      // Read as coder 0, the weights become slot flags.
+      check_coders(bytes, s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
     }
   CHECK(distinct.size() == 2 * choices.size());
-  // The same weight at every depth is coder 3 (RefinementParams): the same
+  // The same weight at every depth is written as one weight: the same
   // bytes as its single weight.
   RefinementParams three = params(4, 3);
   three.gap = 6;
@@ -1277,7 +1259,7 @@ TEST_CASE("ChildKeys: the plane's keys handed out beside a quadric's are those o
   CHECK(fitted > 500);  // the quadric did rank otherwise than the plane, often
 }
 
-TEST_CASE("coder 5 (quadric ranking) round trips, and wins where the surface curves within a few spacings") {
+TEST_CASE("quadric ranking (coder 7) round trips, and wins where the surface curves within a few spacings") {
   const int q = 12;
   // A thin torus sampled about 6 points across its tube's radius: a plane
   // through 4 neighbours misses the curve by a good part of the spacing.
@@ -1294,87 +1276,42 @@ TEST_CASE("coder 5 (quadric ranking) round trips, and wins where the surface cur
         p.plane_contexts = planes;
         p.gap = gap;
         p.fit = fit;
-        // Read as coder 4, the fit and per-depth flag become weights.
-        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::quadric, OctreeCoder::depth_gaps);
+        // Read as coder 0, the fit and per-depth flag become slot flags.
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
         p.depth_gaps = {0, 0, 0, 0, 0, 1, 2, 4, 2, 1, 0, 0};
-        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::quadric, OctreeCoder::depth_gaps);
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
       }
-  // Below 6 neighbours there is no quadric: the tables and symbols of coder
-  // 3, after a header 5 bits longer (fit and the one-weight flag), whatever
-  // the fit.
+  // Below 6 neighbours there is no quadric: the tables and symbols of the
+  // fit 0, whatever the fit; only the header's fit field (bits 7-10) differs.
   RefinementParams three = params(4, 2);
   three.gap = 3;
   RefinementParams five = three;
   five.fit = 5;
   const auto b3 = encode_refinement(s.coarse, s.added, q, three), b5 = encode_refinement(s.coarse, s.added, q, five);
   const auto bit = [](const std::vector<std::uint8_t>& b, std::size_t i) { return (b[i / 8] >> (7 - i % 8)) & 1; };
-  const std::size_t body = 8 * b3.size() - 11 - 7;  // coder 3's header is 11 bits; at most 7 bits of padding
-  bool same = b5.size() * 8 >= 16 + body;
-  for (std::size_t i = 0; same && i < body; ++i) same = bit(b3, 11 + i) == bit(b5, 16 + i);
+  bool same = b5.size() == b3.size() && header_field(b3, 7, 4) == 0 && header_field(b5, 7, 4) == 5;
+  for (std::size_t i = 0; same && i < 8 * b3.size(); ++i) same = (i >= 7 && i < 11) || bit(b3, i) == bit(b5, i);
   CHECK(same);
   five.fit = 1;
   CHECK(encode_refinement(s.coarse, s.added, q, five) != b5);  // the header differs
-  // The encoder's choice: coder 5, or coder 6 (its tables paired) with a
-  // quadric (F >= 6), at least 3 % smaller than every ranking without the
-  // quadric (a single weight; coder 4's per-depth weights aside).
+  // The encoder's choice: coder 7 with a quadric (F >= 6), at least 3 %
+  // smaller than every ranking without the quadric (a single weight;
+  // per-depth weights and pairing aside).
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
   const std::size_t without = smallest_layer(s, q, {0, 1, 2, 3, 4, 6, 8, 12});
   MESSAGE("quadric ranking: ", layer.bytes.size(), " bytes, without: ", without, " (", s.added.size(),
           " added points)");
-  CHECK((layer.coder == 5 || layer.coder == 6));
+  CHECK(layer.coder == 7);
   CHECK(header_field(layer.bytes, 7, 4) >= 6);  // F
   CHECK(100 * layer.bytes.size() <= 97 * without);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                          static_cast<OctreeCoder>(layer.coder)) == sorted(s.added));
-}
-
-TEST_CASE("coder 6 (paired tables) round trips with every ranking, and the encoder pairs where it saves bits") {
-  const int q = 12;
-  const Split s = level_split(quantize(samples::torus(160, 60, 1.0, 0.2), q), 40);
-  // Forced: coder 6 with the rankings of coders 0, 3, 4 and 5, tables paired
-  // where smaller; read as coder 5, the pairing flags are misread.
-  for (int fit : {0, 10})
-    for (int gap : {0, 3})
-      for (bool planes : {false, true}) {
-        CAPTURE(fit);
-        CAPTURE(gap);
-        CAPTURE(planes);
-        RefinementParams p = params(fit ? 4 : 1, 3);
-        p.plane_contexts = planes;
-        p.gap = gap;
-        p.fit = fit;
-        p.paired = true;
-        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::paired, OctreeCoder::quadric);
-      }
-  // The encoder's choice on this surface: coder 6. Its header's fields,
-  // forced, give the same bytes with pairing, and a larger layer without.
-  const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
-  REQUIRE(layer.coder == 6);
-  RefinementParams p = params(static_cast<int>(header_field(layer.bytes, 0, 4)),
-                              static_cast<int>(header_field(layer.bytes, 4, 2)) + 1);
-  p.plane_contexts = header_field(layer.bytes, 6, 1) == 1;
-  p.fit = static_cast<int>(header_field(layer.bytes, 7, 4));
-  if (header_field(layer.bytes, 11, 1) == 0) {
-    p.gap = static_cast<int>(header_field(layer.bytes, 12, 4));
-  } else {
-    for (int d = 0; d < q; ++d) p.depth_gaps.push_back(static_cast<int>(header_field(layer.bytes, 12 + 4 * d, 4)));
-  }
-  p.paired = true;
-  CHECK(encode_refinement(s.coarse, s.added, q, p) == layer.bytes);
-  p.paired = false;
-  const std::size_t unpaired = encode_refinement(s.coarse, s.added, q, p).size();
-  MESSAGE("paired tables: ", layer.bytes.size(), " bytes, unpaired: ", unpaired);
-  CHECK(layer.bytes.size() < unpaired);
-  // Random points in a ball (no surface to rank by, no dominant child): no
-  // table pays for pairing, and the encoder keeps its coder.
-  const Split ball = split_by(quantize(samples::random_ball(3000, 7), q), [](std::size_t i) { return i % 4 == 0; });
-  CHECK(encode_refinement_layer(ball.coarse, ball.added, q).coder != 6);
+                          static_cast<RefineCoder>(layer.coder)) == sorted(s.added));
 }
 
 namespace {
 
-// The header fields of a coder 7 layer (spec 8A.8): the weights have 5 bits.
-RefinementParams far_params(const std::vector<std::uint8_t>& bytes, int q) {
+// The header fields of a coder 7 layer (spec 8A.1): the weights have 5 bits.
+RefinementParams full_params(const std::vector<std::uint8_t>& bytes, int q) {
   RefinementParams p =
       params(static_cast<int>(header_field(bytes, 0, 4)), static_cast<int>(header_field(bytes, 4, 2)) + 1);
   p.plane_contexts = header_field(bytes, 6, 1) == 1;
@@ -1388,7 +1325,39 @@ RefinementParams far_params(const std::vector<std::uint8_t>& bytes, int q) {
 
 }  // namespace
 
-TEST_CASE("coder 7 (far ranking) round trips, and wins where added points fill the holes of a volume") {
+TEST_CASE("paired tables (coder 7) round trip with every ranking, and the encoder pairs where it saves bits") {
+  const int q = 12;
+  const Split s = level_split(quantize(samples::torus(160, 60, 1.0, 0.2), q), 40);
+  // Forced: pairing with the plain, gap and quadric rankings, tables paired
+  // where smaller; read as coder 0, the header is misread.
+  for (int fit : {0, 10})
+    for (int gap : {0, 3})
+      for (bool planes : {false, true}) {
+        CAPTURE(fit);
+        CAPTURE(gap);
+        CAPTURE(planes);
+        RefinementParams p = params(fit ? 4 : 1, 3);
+        p.plane_contexts = planes;
+        p.gap = gap;
+        p.fit = fit;
+        p.paired = true;
+        check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
+      }
+  // The encoder's choice on this surface: coder 7, some tables paired. Its
+  // header's fields, forced, give the same bytes with pairing, and a larger
+  // layer without.
+  const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
+  REQUIRE(layer.coder == 7);
+  RefinementParams p = full_params(layer.bytes, q);
+  p.paired = true;
+  CHECK(encode_refinement(s.coarse, s.added, q, p) == layer.bytes);
+  p.paired = false;
+  const std::size_t unpaired = encode_refinement(s.coarse, s.added, q, p).size();
+  MESSAGE("paired tables: ", layer.bytes.size(), " bytes, unpaired: ", unpaired);
+  CHECK(layer.bytes.size() < unpaired);
+}
+
+TEST_CASE("far ranking (coder 7) round trips, and wins where added points fill the holes of a volume") {
   const int q = 12;
   // A jittered lattice filling a cube, turned against the grid's axes, its
   // points of even indices added: every neighbour of an added point is
@@ -1413,7 +1382,7 @@ TEST_CASE("coder 7 (far ranking) round trips, and wins where added points fill t
       }
   const Split s = split_by(all, [&](std::size_t i) { return even[i] != 0; });
   // Forced: far ranking at every depth, and mixed with gap weights, plane
-  // contexts, the quadric; read as coder 6 (4-bit weights), misread.
+  // contexts, the quadric; read as coder 0, misread.
   for (int k : {0, 1, 4, 8})
     for (int fit : {0, 10}) {
       CAPTURE(k);
@@ -1421,20 +1390,20 @@ TEST_CASE("coder 7 (far ranking) round trips, and wins where added points fill t
       RefinementParams p = params(k, 2);
       p.fit = fit;
       p.gap = kFarRanking;
-      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::far, OctreeCoder::paired);
+      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
       p.gap = 0;
       p.plane_contexts = true;
       p.depth_gaps = {0, 3, 16, 0, 16, 15, 16, 16, 1, 16, 16, 16};
-      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, OctreeCoder::far, OctreeCoder::paired);
+      check_coders(encode_refinement(s.coarse, s.added, q, p), s, q, RefineCoder::ranked_octree, RefineCoder::conditional_octree);
     }
   // The encoder's choice: coder 7, far ranking at the depths below the
   // coarse spacing. Its header, forced, gives a layer of about its size;
-  // with weight 0 at those depths (the ranking of coder 6) a larger one.
+  // with weight 0 at those depths (the nearest first) a larger one.
   const RefinementLayer layer = encode_refinement_layer(s.coarse, s.added, q);
   REQUIRE(layer.coder == 7);
   CHECK(decode_refinement(layer.bytes.data(), layer.bytes.size(), q, s.coarse, s.added.size(), TableForm::deltas,
-                          OctreeCoder::far) == sorted(s.added));
-  RefinementParams p = far_params(layer.bytes, q);
+                          RefineCoder::ranked_octree) == sorted(s.added));
+  RefinementParams p = full_params(layer.bytes, q);
   p.paired = true;
   const std::size_t far = encode_refinement(s.coarse, s.added, q, p).size();
   CHECK(far <= layer.bytes.size() + 1);  // the forced path pairs tables that save less than a byte
@@ -1449,7 +1418,7 @@ TEST_CASE("coder 7 (far ranking) round trips, and wins where added points fill t
   CHECK(100 * far < 95 * near_first);
 }
 
-TEST_CASE("coder 7: weight 16 ranks farthest first, and a weight above 16 is bad_layer") {
+TEST_CASE("coder 7: weight 16 ranks farthest first, a weight above 16 is bad_layer, other coders are refused") {
   // q = 1, one coarse point at the origin (child 0), one added point sent as
   // the child of rank 7. Weight 0 (the ranking of 8A.1 with one neighbour):
   // child 0 (coarse), then by distance to the neighbour, nearest first, so
@@ -1472,7 +1441,7 @@ TEST_CASE("coder 7: weight 16 ranks farthest first, and a weight above 16 is bad
     const Points coarse{{0, 0, 0}};
     Points got;
     const Status st = status_of([&] {
-      got = decode_refinement(bytes.data(), bytes.size(), 1, coarse, 1, TableForm::deltas, OctreeCoder::far);
+      got = decode_refinement(bytes.data(), bytes.size(), 1, coarse, 1, TableForm::deltas, RefineCoder::ranked_octree);
     });
     if (weight > 16) {
       CHECK(st == Status::bad_layer);
@@ -1480,5 +1449,16 @@ TEST_CASE("coder 7: weight 16 ranks farthest first, and a weight above 16 is bad
       REQUIRE(st == Status::ok);
       CHECK(got == (weight == 16 ? Points{{1, 0, 0}} : Points{{1, 1, 1}}));
     }
+  }
+  // The conditional octree has two headers, coders 0 and 7; any other number
+  // is not one of its coders (the container's decoder refuses them first, as
+  // bad_layer: test_levels).
+  const Points coarse{{0, 0, 0}};
+  const std::uint8_t bytes[] = {0x13, 0x07};
+  for (const int coder : {1, 2, 3, 4, 5, 6, 8}) {
+    CAPTURE(coder);
+    CHECK(status_of([&] {
+      decode_refinement(bytes, 2, 1, coarse, 1, TableForm::deltas, static_cast<RefineCoder>(static_cast<std::uint8_t>(coder)));
+    }) == Status::invalid_argument);
   }
 }

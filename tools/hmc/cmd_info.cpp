@@ -16,12 +16,7 @@ const char* refinement_coder_name(int coder) {
   switch (coder) {
     case 0: return "conditional octree";
     case 1: return "anchored VQ (lossy)";
-    case 2: return "conditional octree, plane contexts";
-    case 3: return "conditional octree, gap ranking";
-    case 4: return "conditional octree, gap ranking per depth";
-    case 5: return "conditional octree, quadric ranking";
-    case 6: return "conditional octree, quadric ranking, paired tables";
-    case 7: return "conditional octree, far ranking";
+    case 7: return "conditional octree, full header";
     default: return "unknown";
   }
 }
@@ -30,11 +25,7 @@ const char* refinement_coder_name(int coder) {
 const char* base_coder_name(int coder) {
   switch (coder) {
     case 0: return "octree";
-    case 1: return "ranked octree";
-    case 2: return "ranked octree, gap weights";
-    case 3: return "ranked octree, causal points";
-    case 4: return "ranked octree, causal points, paired tables";
-    case 5: return "ranked octree, far ranking";
+    case 5: return "ranked octree";
     default: return "unknown";
   }
 }

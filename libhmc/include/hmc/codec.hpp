@@ -155,7 +155,7 @@ struct EncodeOptions {
   /// the two coders is smaller). At most 2^21 - 1.
   std::uint32_t vq_residual = 0;
   /// Code the points for decoding speed: plain octrees (BASE coder 0, exact
-  /// REFN layers coder 0 without neighbours), which a decoder reads without
+  /// REFN layers without neighbours), which a decoder reads without
   /// a nearest-neighbour search per node. The stream is larger (the shared
   /// scanned surfaces' by about a fifth, a dense generated torus's by half:
   /// the ranked coders' prediction is off) and decoding the points is tens
@@ -213,12 +213,9 @@ struct LevelReport {
   Optimizer optimizer = Optimizer::best;       ///< the inner optimiser that was used (what `best` chose)
   double mean_importance_retained = 0;         ///< mean IP (eq. 3.1) of the interior vertices kept
 
-  /// Refinement coder of this level's layer: 0 conditional octree (exact),
-  /// 1 anchored vector quantizer (EncodeOptions::vq_bits), 2 conditional
-  /// octree with plane contexts (exact), 3 the same with gap ranking (exact),
-  /// 4 with a gap weight per depth (exact), 5 with quadric ranking (exact),
-  /// 6 coder 5 with paired tables (exact), 7 coder 6 with far ranking
-  /// (exact); 0 for the base.
+  /// Refinement coder of this level's layer (spec 8A): 0 conditional octree
+  /// with the short header, 7 with the full header (both exact), 1 anchored
+  /// vector quantizer (EncodeOptions::vq_bits); 0 for the base.
   int coder = 0;
   // Encoder only, coder 1: distances (grid units) of the decoded added
   // points from the input's, and input points the layer could not place.

@@ -138,11 +138,8 @@ std::vector<GridPoint> decode_layer(const ChunkView& c, int q, const std::vector
                                     TableForm tables, const VectorQuantizer* vq) {
   if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
   const auto coder = static_cast<RefineCoder>(c.payload[0]);
-  if (coder == RefineCoder::conditional_octree || coder == RefineCoder::conditional_octree_planes ||
-      coder == RefineCoder::conditional_octree_gap || coder == RefineCoder::conditional_octree_depth_gaps ||
-      coder == RefineCoder::conditional_octree_quadric || coder == RefineCoder::conditional_octree_paired ||
-      coder == RefineCoder::conditional_octree_far)
-    return decode_refinement(c.payload + 1, c.length - 1, q, coarse, n, tables, static_cast<OctreeCoder>(coder));
+  if (is_octree_refine_coder(c.payload[0]))
+    return decode_refinement(c.payload + 1, c.length - 1, q, coarse, n, tables, coder);
   if (coder == RefineCoder::anchored_vq) {
     if (!vq) fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");
     return decode_vq_layer(c.payload + 1, c.length - 1, q, coarse, *vq, n, tables);

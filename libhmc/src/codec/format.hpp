@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "codec/coders.hpp"
 #include "container/container.hpp"
 #include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
@@ -56,21 +57,5 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form 
 
 constexpr std::uint32_t kMaxClasses = 64;
 constexpr std::uint32_t kMaxScaleRank = 64;
-
-/// Refinement-layer coders (first byte of REFN).
-/// REFN coders (spec 8A): 0, 2, 3, 4, 5, 6 and 7 exact (2 adds plane
-/// contexts, 3 also the gap ranking, 4 with a gap weight per depth, 5 the
-/// quadric ranking, 6 coder 5 with paired tables, 7 coder 6 with far
-/// ranking), 1 lossy.
-enum class RefineCoder : std::uint8_t {
-  conditional_octree = 0,
-  anchored_vq = 1,
-  conditional_octree_planes = 2,
-  conditional_octree_gap = 3,
-  conditional_octree_depth_gaps = 4,
-  conditional_octree_quadric = 5,
-  conditional_octree_paired = 6,
-  conditional_octree_far = 7
-};
 
 }  // namespace hmc::detail

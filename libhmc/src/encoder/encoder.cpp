@@ -510,7 +510,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   WindingCache winding;  // the input surface's winding numbers, from one level to the next
   winding.helpers = &helpers;
   LayerJobs jobs(options.vq_bits == 0, helpers);  // lossy layers are planned apart
-  const std::uint8_t base_coder = options.fast_decode ? 0 : 5;
+  const BaseCoder base_coder = options.fast_decode ? BaseCoder::octree : BaseCoder::ranked;
   std::string stopped;  // why a level before the last requested one is the coarsest
   // EncodeOptions::preview_ratio: below the independent-set levels, levels
   // of octree cells until one holds at most this many points.

@@ -36,7 +36,7 @@ std::uint64_t coded_bits(const std::vector<std::uint64_t>& freq, TableForm form 
 
 /// The counts with unused symbols given a phantom count, the first ones
 /// first, until two symbols are used: for a code that gives codes to two
-/// symbols at least, so that each of its symbols costs a bit (spec 8.2, 8.5).
+/// symbols at least, so that each of its symbols costs a bit (spec 8.2).
 std::vector<std::uint64_t> two_symbols_at_least(std::vector<std::uint64_t> freq);
 
 class HuffmanCode;

@@ -33,7 +33,7 @@ constexpr std::uint32_t kPairAlphabet = kPairEscape + 1;
 /// writing it would take (encoders' plans). `sequence`: the table's symbols
 /// in the order of use, each below `alphabet`. `two_codes`: the pair code
 /// must have codes for two pairs at least (not the one-symbol form: where
-/// every pair must cost a bit, spec 8.5).
+/// every pair must cost a bit, spec 8.2).
 std::uint64_t paired_bits(const std::vector<std::uint32_t>& sequence, std::uint32_t alphabet, TableForm form,
                           bool two_codes = false);
 

@@ -174,18 +174,17 @@ std::vector<std::uint8_t> encode_octree(const std::vector<GridPoint>& points, in
 
 namespace {
 
-constexpr std::uint8_t kPlainCoder = 0, kRankedCoder = 1, kGapCoder = 2, kCausalCoder = 3, kPairedCoder = 4,
-                       kFarCoder = 5;
-// The gap weights the reference encoder tries at a ranked depth: coders 2-4
-// the first nine, coder 5 also kFarRanking (spec 8.6).
+constexpr auto kPlainCoder = static_cast<std::uint8_t>(BaseCoder::octree);
+constexpr auto kRankedCoder = static_cast<std::uint8_t>(BaseCoder::ranked);
+// The gap weights the reference encoder tries at a ranked depth.
 constexpr std::array<int, 10> kGapChoices{0, 1, 2, 3, 4, 6, 8, 11, 15, kFarRanking};
 constexpr std::size_t kFarChoice = kGapChoices.size() - 1;  // kFarRanking's index
 constexpr int kMaxNeighbours = 15;  // 4-bit field
-// The neighbour counts the reference encoder tries: coder 2 the first,
-// coder 3 both (15 suits surfaces, whose nodes then take more decoded
+// The neighbour counts the reference encoder tries (15 suits surfaces,
+// whose nodes then take more decoded
 // children into their points; 10 the interiors of volumes).
 constexpr std::array<int, 2> kBaseNeighbours{10, 15};
-constexpr int kCausalPoints = kMaxRankPoints;  // coder 3: the most points a node is ranked by (spec 8.4)
+constexpr int kCausalPoints = kMaxRankPoints;  // the most points a node is ranked by
 
 // The nodes of one depth in Morton order, with the centres of their cells
 // in doubled grid coordinates, and their nearest neighbours: looked up in a
@@ -232,7 +231,7 @@ class DepthNodes {
   /// the k nearest node centres of the depth, the node's own included.
   /// Returns the node's context (spec 8.2): from how many children lie on
   /// the smaller side of the plane, 0 | 1 | 2-3 | 4 -> 0 | 1 | 2 | 3.
-  /// `causal`, `quadric`: coder 3 (spec 8.4), below.
+  /// `causal`, `quadric`: the causal points and the quadric, below.
   int rank(std::uint64_t node, std::size_t i, int neighbours, std::array<int, 8>& order, int gap = 0,
            const std::uint8_t* causal = nullptr, bool quadric = false) const {
     int context = 0;
@@ -251,9 +250,9 @@ class DepthNodes {
   }
 
   /// The keys that rank node i's children, with its context; `with_gaps`:
-  /// for gap weights (coders 2 and 3, spec 8.3), the distances to the
-  /// nearest neighbour other than the node itself (the first). `causal`
-  /// (coder 3, spec 8.4): the occupancies of the depth's nodes before i
+  /// for gap weights, the distances to the
+  /// nearest neighbour other than the node itself (the first). `causal`:
+  /// the occupancies of the depth's nodes before i
   /// (causal[j], j < i); a neighbour among them stands for the centres of
   /// its occupied children; `quadric`: rank by the quadric through them all.
   ChildKeys keys(std::uint64_t node, std::size_t i, int neighbours, bool with_gaps, int& context,
@@ -263,7 +262,7 @@ class DepthNodes {
     return keys_of(node, nb, count, with_gaps, quadric, context);
   }
 
-  /// The points that rank node i's children (spec 8.2; 8.4 with `causal`)
+  /// The points that rank node i's children (the causal points with `causal`)
   /// into `nb`; returns their number.
   int points(std::size_t i, int neighbours, const std::uint8_t* causal, std::array<Doubled, kCausalPoints>& nb) const {
     Near near;
@@ -326,9 +325,9 @@ class DepthNodes {
     return out;
   }
 
-  /// Coder 3's symbols of node i for every weight of kGapChoices, ranked by
+  /// The symbols of node i for every weight of kGapChoices, ranked by
   /// the plane (the first kGapChoices.size()) and by the quadric (the rest);
-  /// coder 2's when `causal` is null (the plane only; the rest left 0).
+  /// `causal`: the depth's occupancies decoded before node i.
   std::array<std::uint8_t, 2 * kGapChoices.size()> symbols(std::uint64_t node, std::size_t i, unsigned occupancy,
                                                            int neighbours, const std::uint8_t* causal,
                                                            int& context) const {
@@ -343,11 +342,6 @@ class DepthNodes {
     std::array<std::uint8_t, 2 * kGapChoices.size()> out{};
     std::array<Doubled, kCausalPoints> nb{};
     const int count = expand(i, near, found, causal, nb);
-    if (!causal) {
-      keys_of(node, nb, count, true, false, context).symbols(0u, kGapChoices.data(), kGapChoices.size(), occupancy,
-                                                            out.data());
-      return out;
-    }
     // The quadric's keys and, from the same work, the plane's.
     ChildKeys plane;
     const ChildKeys quadric = keys_of(node, nb, count, true, true, context, &plane);
@@ -454,19 +448,15 @@ class SearchAhead {
   std::future<void> job_;
 };
 
-// Coder 3 with `classes` contexts per ranked depth, from the plain and
+// Coder 5 with `classes` contexts per ranked depth, from the plain and
 // ranked symbols of every depth (ranked[d][i], context[d][i]) and each
-// depth's gap weight and quadric flag; coder 2 (no flags) unless `causal`.
-// With `pairing` (coder 3 only), coder 4 when pairing some tables (spec
-// 7.4) saves more than their flags cost: `paired` says which was written.
-// `wide` (with `causal` and `pairing`): coder 5, 5-bit weights and a flag
-// before every table, each paired where that is smaller (spec 8.6).
+// depth's gap weight and quadric flag: 5-bit weights and a flag before
+// every table, each paired (spec 7.4) where that is smaller.
 std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels, int q, int classes,
                                        const std::vector<std::vector<std::uint8_t>>& ranked_sym,
                                        const std::vector<std::vector<std::uint8_t>>& context, bool& any_ranked,
-                                       const std::vector<int>& gaps, const std::vector<bool>& quadric, bool causal,
-                                       int neighbours, bool pairing, bool& paired, bool wide = false) {
-  const int weight_bits = wide ? kFarWeightBits : 4;
+                                       const std::vector<int>& gaps, const std::vector<bool>& quadric,
+                                       int neighbours) {
   any_ranked = false;
   std::vector<bool> ranked(static_cast<std::size_t>(q), false);
   // Per depth, its tables' symbol sequences in node order (one table at a
@@ -486,7 +476,7 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
       context_bits.push_back(table_and_symbols(f, HuffmanCode::from_frequencies(two_symbols_at_least(f))));
     // Rank only where it pays for the decoder's searches: 2% of the depth
     // (the depth's weight, and quadric flag, included).
-    const auto header = static_cast<std::uint64_t>(weight_bits + (causal ? 1 : 0));
+    const auto header = static_cast<std::uint64_t>(kFarWeightBits + 1);
     const std::uint64_t ranked_bits = std::accumulate(context_bits.begin(), context_bits.end(), header);
     const bool use = !ranked_sym[sd].empty() && 100 * ranked_bits < 98 * plain_bits;
     table_bits[sd] = use ? std::move(context_bits) : std::vector<std::uint64_t>{plain_bits};
@@ -503,22 +493,16 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   }
   // Pairing: each table where its paired form is smaller (at a ranked
   // depth, with a pair code of two symbols at least, so that every pair of
-  // ranked nodes costs a bit, spec 8.5); worth it when the savings exceed
-  // the flags.
+  // ranked nodes costs a bit).
   std::vector<std::vector<bool>> pair(static_cast<std::size_t>(q));
-  std::uint64_t saved = 0, flags = 0;
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     for (std::size_t j = 0; j < seqs[sd].size(); ++j) {
-      ++flags;
       const std::uint64_t plain = table_bits[sd][j];
-      const std::uint64_t pairs =
-          pairing ? paired_bits(seqs[sd][j], ranked[sd] ? 255 : 256, TableForm::deltas, ranked[sd]) : plain;
-      if (pairs < plain) saved += plain - pairs;
+      const std::uint64_t pairs = paired_bits(seqs[sd][j], ranked[sd] ? 255 : 256, TableForm::deltas, ranked[sd]);
       pair[sd].push_back(pairs < plain);
     }
   }
-  paired = pairing && (wide || saved > flags);
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(classes - 1), 2);
@@ -526,12 +510,11 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   for (int d = 0; d < q; ++d) {
     const auto sd = static_cast<std::size_t>(d);
     w.put(ranked[sd] ? 1 : 0, 1);
-    if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), weight_bits);
-    if (ranked[sd] && causal) w.put(quadric[sd] ? 1 : 0, 1);
+    if (ranked[sd]) w.put(static_cast<std::uint32_t>(gaps[sd]), kFarWeightBits);
+    if (ranked[sd]) w.put(quadric[sd] ? 1 : 0, 1);
     for (std::size_t j = 0; j < seqs[sd].size(); ++j) {
-      codes[sd].push_back(
-          TableCode::build(std::move(seqs[sd][j]), ranked[sd] ? 255 : 256, paired && pair[sd][j], ranked[sd]));
-      codes[sd].back().write(w, paired, TableForm::deltas);
+      codes[sd].push_back(TableCode::build(std::move(seqs[sd][j]), ranked[sd] ? 255 : 256, pair[sd][j], ranked[sd]));
+      codes[sd].back().write(w, true, TableForm::deltas);
     }
   }
   for (int d = 0; d < q; ++d) {
@@ -546,27 +529,16 @@ std::vector<std::uint8_t> write_ranked(const std::vector<DepthOccupancy>& levels
   return w.finish();
 }
 
-// Whether coder `coder` may rank by choice g of DepthNodes::symbols (a
-// weight of kGapChoices, by the plane below kGapChoices.size(), by the
-// quadric from there): coder 2 by the plane with the first nine weights,
-// coders 3 and 4 by the quadric too, coder 5 also with kFarRanking.
-bool choice_open(std::size_t g, std::uint8_t coder) {
-  if (g % kGapChoices.size() == kFarChoice && coder < kFarCoder) return false;
-  return coder >= kCausalCoder || g < kGapChoices.size();
-}
-
 // Whether ranking a large depth may pay, judged on a Morton-contiguous
 // (so spatially compact) block of its nodes: 8,192 nodes indexed by
 // themselves, the middle half ranked. An estimate (neighbours outside the
 // block are missed), so that the encoder does not rank every node of a
 // large depth to learn that ranking does not pay (a million random points:
-// 12 times the plain coder's time without it). Every ranking `coder` may
-// choose (choice_open), each judged by its symbols' entropy: the best one
+// 12 times the plain coder's time without it). Every ranking the encoder
+// may choose, each judged by its symbols' entropy: the best one
 // decides (at the bunny's last depth the plane alone saves 0.4 %, the
 // quadric with gap weights 17 %).
-bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q,
-                     std::uint8_t coder) {
-  const bool causal = coder >= kCausalCoder;
+bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupancy& level, int d, int q) {
   constexpr std::size_t kBlock = 8192;
   const std::size_t n = nodes.size();
   if (n <= 2 * kBlock) return true;
@@ -574,7 +546,7 @@ bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupan
   const std::vector<std::uint64_t> block(nodes.begin() + static_cast<std::ptrdiff_t>(b0),
                                          nodes.begin() + static_cast<std::ptrdiff_t>(b0 + kBlock));
   const DepthNodes depth(block, d, q);
-  const std::uint8_t* decoded = causal ? level.occupancy.data() + b0 : nullptr;
+  const std::uint8_t* decoded = level.occupancy.data() + b0;
   constexpr std::size_t kRankings = 2 * kGapChoices.size();  // every choice of encode_ranked
   std::vector<std::uint64_t> plain(256, 0), ranked(kRankings * 255, 0);
   int context = 0;
@@ -587,12 +559,12 @@ bool ranking_may_pay(const std::vector<std::uint64_t>& nodes, const DepthOccupan
   double least = entropy_bits(plain.data(), plain.size());
   const double bound = 0.995 * least;
   for (std::size_t g = 0; g < kRankings; ++g)
-    if (choice_open(g, coder)) least = std::min(least, entropy_bits(ranked.data() + g * 255, 255));
+    least = std::min(least, entropy_bits(ranked.data() + g * 255, 255));
   return least < bound;
 }
 
 // The ranked symbols of every depth for one neighbour count, with each
-// depth's gap weight and quadric flag (spec 8.4) or weight alone (8.3).
+// depth's gap weight and quadric flag (spec 8.2) or weight alone (8.2).
 struct RankedDepths {
   std::vector<std::vector<std::uint8_t>> symbols, context;  // [d][i]; empty where a depth is not ranked
   std::vector<int> gaps;
@@ -602,12 +574,12 @@ struct RankedDepths {
 
 // Node i's symbols and context for every choice (weight, plane or quadric)
 // are all[i * kChoices + choice], ctx[i]; returns the cheapest choice open
-// to coder `coder` (choice_open), tables included, with the 4 contexts
+// to the encoder, tables included, with the 4 contexts
 // merged into 1, 2 or 4 as write_ranked may merge them, and (second) the
 // cheapest of those without kFarRanking.
 constexpr std::size_t kChoices = 2 * kGapChoices.size();  // plane, then quadric, for each weight
 std::pair<std::size_t, std::size_t> cheapest_choice(const std::vector<std::uint8_t>& all,
-                                                    const std::vector<std::uint8_t>& ctx, std::uint8_t coder) {
+                                                    const std::vector<std::uint8_t>& ctx) {
   std::vector<std::vector<std::uint64_t>> freq(kChoices, std::vector<std::uint64_t>(4 * 255, 0));
   for (std::size_t i = 0; i < ctx.size(); ++i)
     for (std::size_t g = 0; g < kChoices; ++g)
@@ -615,7 +587,6 @@ std::pair<std::size_t, std::size_t> cheapest_choice(const std::vector<std::uint8
   std::size_t chosen = 0, near = 0;
   double least = 0, least_near = 0;
   for (std::size_t g = 0; g < kChoices; ++g) {
-    if (!choice_open(g, coder)) continue;
     double bits = 0;
     for (std::size_t classes : {1, 2, 4}) {
       std::vector<std::vector<std::uint64_t>> merged(classes, std::vector<std::uint64_t>(255, 0));
@@ -629,17 +600,14 @@ std::pair<std::size_t, std::size_t> cheapest_choice(const std::vector<std::uint8
   return {chosen, near};
 }
 
-// Coder 3: at every depth, the ranked symbols for the gap weight and
+// Coder 5: at every depth, the ranked symbols for the gap weight and
 // ranking (plane or quadric) that make them cheapest, for each neighbour
-// count of kBaseNeighbours; the smallest stream. Coder 2 (the weight
-// alone, the ranking of 8.3, the first neighbour count) for `coder` 2;
-// for 4, coder 4 where it is smaller; for 5, coder 5 where the far ranking
-// makes it smaller still. `coder` is set to the one written.
+// count of kBaseNeighbours; the smallest stream, and the far ranking where
+// it makes that smaller still.
 std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& levels, const std::vector<std::uint64_t>& keys,
-                                        int q, bool& any_ranked, std::uint8_t& coder, HelperBudget* helpers) {
+                                        int q, bool& any_ranked, HelperBudget* helpers) {
   const auto sq = static_cast<std::size_t>(q);
-  const bool causal = coder >= kCausalCoder, pairing = coder >= kPairedCoder, far = coder >= kFarCoder;
-  const std::size_t counts = causal ? kBaseNeighbours.size() : 1;
+  const std::size_t counts = kBaseNeighbours.size();
   // by_count[n]: without the far ranking; with_far[n]: with it, where some
   // depth takes it (else empty).
   std::vector<RankedDepths> by_count(counts, RankedDepths(sq));
@@ -649,7 +617,7 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
     const auto sd = static_cast<std::size_t>(d);
     const auto nodes = nodes_at(keys, d, q);
     const auto& occ = levels[sd].occupancy;
-    if (!ranking_may_pay(nodes, levels[sd], d, q, coder)) continue;
+    if (!ranking_may_pay(nodes, levels[sd], d, q)) continue;
     const DepthNodes depth(nodes, d, q);
     // Each node's nearest nodes are searched once, for the largest count:
     // the smaller counts take their first ones.
@@ -668,7 +636,7 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
         for (std::size_t n = 0; n < counts; ++n) {
           int c = 0;
           const int k = std::min(found, kBaseNeighbours[n]);
-          const auto s = depth.symbols(nodes[i], i, occ[i], near, k, causal ? occ.data() : nullptr, c);
+          const auto s = depth.symbols(nodes[i], i, occ[i], near, k, occ.data(), c);
           by_count[n].context[sd][i] = static_cast<std::uint8_t>(c);
           std::copy(s.begin(), s.end(), all[n].begin() + static_cast<std::ptrdiff_t>(i * kChoices));
         }
@@ -677,14 +645,14 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
     for (std::size_t n = 0; n < counts; ++n) {
       RankedDepths& r = by_count[n];
       const auto& ctx = r.context[sd];
-      const auto [chosen, near] = cheapest_choice(all[n], ctx, coder);
+      const auto [chosen, near] = cheapest_choice(all[n], ctx);
       auto take = [&](RankedDepths& into, std::size_t choice) {
         into.gaps[sd] = kGapChoices[choice % kGapChoices.size()];
         into.quadric[sd] = choice >= kGapChoices.size();
         into.symbols[sd].resize(occ.size());
         for (std::size_t i = 0; i < nodes.size(); ++i) into.symbols[sd][i] = all[n][i * kChoices + choice];
       };
-      if (far && chosen != near && !with_far[n]) with_far[n] = r;  // the depths before, as without it
+      if (chosen != near && !with_far[n]) with_far[n] = r;  // the depths before, as without it
       take(r, near);
       if (with_far[n]) {
         with_far[n]->context[sd] = ctx;
@@ -696,35 +664,29 @@ std::vector<std::uint8_t> encode_ranked(const std::vector<DepthOccupancy>& level
   // more neighbours only where they save 1% of it (they make decoding
   // slower: on the bunny's base layer, 15 instead of 10 take points-only
   // decoding from 0.21 to 0.33 s for 0.3%). The neighbour count is chosen
-  // on coder 3's streams, then coder 4 (its tables paired where that is
-  // smaller) or coder 5 kept where it makes the chosen count's stream
-  // smaller.
+  // without the far ranking, which is then kept where it makes the chosen
+  // count's stream smaller.
   struct Written {
     std::vector<std::uint8_t> bytes;
     bool any = false;
-    std::uint8_t coder = 0;
   };
-  auto keep = [&](Written& out, std::size_t n, const RankedDepths& r, bool pairs, bool wide, std::uint8_t as) {
+  auto keep = [&](Written& out, std::size_t n, const RankedDepths& r) {
     for (int classes : {1, 2, 4}) {
-      bool any = false, with_pairs = false;
-      auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, causal,
-                                kBaseNeighbours[n], pairs, with_pairs, wide);
-      if (pairs && !with_pairs) continue;  // the same stream as without pairing
-      if (out.bytes.empty() || bytes.size() < out.bytes.size()) out = {std::move(bytes), any, as};
+      bool any = false;
+      auto bytes = write_ranked(levels, q, classes, r.symbols, r.context, any, r.gaps, r.quadric, kBaseNeighbours[n]);
+      if (out.bytes.empty() || bytes.size() < out.bytes.size()) out = {std::move(bytes), any};
     }
   };
   Written best;
   std::size_t best_count = 0;
   for (std::size_t n = 0; n < counts; ++n) {
     Written smallest;
-    keep(smallest, n, by_count[n], false, false, causal ? kCausalCoder : kGapCoder);
+    keep(smallest, n, by_count[n]);
     if (best.bytes.empty() || 100 * smallest.bytes.size() < 99 * best.bytes.size())
       best = std::move(smallest), best_count = n;
   }
-  if (pairing) keep(best, best_count, by_count[best_count], true, false, kPairedCoder);
-  if (with_far[best_count]) keep(best, best_count, *with_far[best_count], true, true, kFarCoder);
+  if (with_far[best_count]) keep(best, best_count, *with_far[best_count]);
   any_ranked = best.any;
-  coder = best.coder;
   return best.bytes;
 }
 
@@ -744,7 +706,7 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
                                     int neighbours, const std::vector<int>& gaps, bool causal = false,
                                     const std::vector<bool>& quadric = {}, HelperBudget* helpers = nullptr) {
   std::vector<std::uint64_t> nodes{0}, next;
-  std::vector<std::uint8_t> occupancies;  // coder 3: the depth's occupancies so far
+  std::vector<std::uint8_t> occupancies;  // coder 5: the depth's occupancies so far
   std::array<int, 8> order{};
   for (int d = 0; d < q; ++d) {
     next.clear();
@@ -785,70 +747,65 @@ std::vector<GridPoint> decode_nodes(BitReader& in, int q, std::uint64_t n,
   return canonical_from_morton(nodes, q, next);  // next: spare capacity for the sort
 }
 
-// Coder 1, 2 (a gap weight per ranked depth), 3 (a gap weight and a
-// quadric flag per ranked depth, and the causal points), 4 (coder 3 with
-// a pairing flag per table) or 5 (coder 4 with 5-bit weights).
+// Coder 5: a ranked flag per depth and, at a ranked depth, its 5-bit
+// weight, its quadric flag and a pairing flag before every table.
 std::vector<GridPoint> decode_ranked(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n, TableForm form,
-                                     std::uint8_t coder, HelperBudget* helpers) {
+                                     HelperBudget* helpers) {
   BitReader in(data, size, "BASE ranked octree");
   const int neighbours = static_cast<int>(in.get(4));
   const int classes = static_cast<int>(in.get(2)) + 1;
-  const bool causal = coder >= kCausalCoder, flagged = coder >= kPairedCoder;
-  const int weight_bits = coder == kFarCoder ? kFarWeightBits : 4;  // coder 5: 0-15 and kFarRanking (spec 8.6)
   std::vector<std::vector<TableCode>> codes(static_cast<std::size_t>(q));
   std::vector<bool> ranked;
   std::vector<int> gaps(static_cast<std::size_t>(q), 0);
   std::vector<bool> quadric(static_cast<std::size_t>(q), false);
   for (int d = 0; d < q; ++d) {
     ranked.push_back(in.get(1) == 1);
-    if (ranked.back() && coder >= kGapCoder) {
-      const int gap = static_cast<int>(in.get(weight_bits));
+    if (ranked.back()) {
+      const int gap = static_cast<int>(in.get(kFarWeightBits));
       if (gap > kFarRanking)
         fail(Status::bad_layer, "BASE ranked octree: ranking weight " + std::to_string(gap) + " at depth " +
                                     std::to_string(d) + " (at most 16)");
       gaps[static_cast<std::size_t>(d)] = gap;
+      quadric[static_cast<std::size_t>(d)] = in.get(1) == 1;
     }
-    if (ranked.back() && causal) quadric[static_cast<std::size_t>(d)] = in.get(1) == 1;
     const std::string what = "BASE ranked octree table for depth " + std::to_string(d);
     if (!ranked.back()) {
-      codes[static_cast<std::size_t>(d)].push_back(TableCode::read(in, 256, flagged, what, form));
+      codes[static_cast<std::size_t>(d)].push_back(TableCode::read(in, 256, true, what, form));
       continue;
     }
     for (int j = 0; j < classes; ++j) {
       codes[static_cast<std::size_t>(d)].push_back(
-          TableCode::read(in, 255, flagged, what + " context " + std::to_string(j), form));
+          TableCode::read(in, 255, true, what + " context " + std::to_string(j), form));
       // Every ranked node costs a bit, every pair of them when paired: its
-      // nearest-neighbour search is paid for by the stream (spec 8.2, 8.5).
+      // nearest-neighbour search is paid for by the stream (spec 8.2).
       if (codes[static_cast<std::size_t>(d)].back().free())
         fail(Status::bad_layer, what + " context " + std::to_string(j) + ": a one-symbol code at a ranked depth");
     }
   }
-  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps, causal, quadric, helpers);
+  return decode_nodes(in, q, n, codes, ranked, neighbours, gaps, true, quadric, helpers);
 }
 
 }  // namespace
 
-std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder,
+std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, BaseCoder coder,
                                       HelperBudget* helpers) {
-  if (ranked_coder != kPlainCoder && ranked_coder != kGapCoder && ranked_coder != kCausalCoder &&
-      ranked_coder != kPairedCoder && ranked_coder != kFarCoder)
-    fail(Status::invalid_argument, "BASE: the encoder writes coders 0, 2, 3, 4 and 5 only");
+  if (!is_base_coder(static_cast<std::uint8_t>(coder)))
+    fail(Status::invalid_argument, "BASE: the coders are 0 and 5");
   const auto keys = sorted_keys(points, q);
   const auto levels = occupancies(keys, q);
   auto plain = write_octree(levels, q);
-  if (ranked_coder == kPlainCoder) {
+  if (coder == BaseCoder::octree) {
     plain.insert(plain.begin(), kPlainCoder);
     return plain;
   }
   bool any_ranked = false;
-  std::uint8_t coder = ranked_coder;
-  auto ranked = encode_ranked(levels, keys, q, any_ranked, coder, helpers);
+  auto ranked = encode_ranked(levels, keys, q, any_ranked, helpers);
   std::vector<std::uint8_t> out;
   // A ranked coder only when it saves 1% of the layer: its searches cost
-  // decoding time (measured with coder 1: on a million random points in a
-  // ball it saved 0.05% and made points-only decoding 25% slower).
+  // decoding time (measured with spec 0.15's coder 1: on a million random
+  // points in a ball it saved 0.05% and made points-only decoding 25% slower).
   const bool use_ranked = any_ranked && 100 * ranked.size() < 99 * plain.size();
-  out.push_back(use_ranked ? coder : kPlainCoder);
+  out.push_back(use_ranked ? kRankedCoder : kPlainCoder);
   const auto& body = use_ranked ? ranked : plain;
   out.insert(out.end(), body.begin(), body.end());
   return out;
@@ -858,8 +815,7 @@ std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, i
                                    HelperBudget* helpers) {
   if (size < 1) fail(Status::bad_layer, "BASE: empty payload");
   if (data[0] == kPlainCoder) return decode_octree(data + 1, size - 1, q, n, form);
-  if (data[0] >= kRankedCoder && data[0] <= kFarCoder)
-    return decode_ranked(data + 1, size - 1, q, n, form, data[0], helpers);
+  if (data[0] == kRankedCoder) return decode_ranked(data + 1, size - 1, q, n, form, helpers);
   fail(Status::bad_layer, "BASE: unknown coder " + std::to_string(data[0]));
 }
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "codec/coders.hpp"
 #include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
 #include "util/helpers.hpp"
@@ -25,30 +26,23 @@ std::vector<GridPoint> decode_octree(const std::uint8_t* data, std::size_t size,
                                      TableForm form = TableForm::deltas);
 
 /// The whole BASE payload (spec section 8): a coder byte, then coder 0
-/// (encode_octree) or coder 3, the ranked octree with causal points (8.4),
-/// whichever is smaller by 1% at least; coder 3 becomes coder 4 (8.5) where
-/// pairing some of its tables makes it smaller, coder 5 (8.6) where ranking
-/// some depths by the far ranking makes it smaller still. Coder 1 (8.2)
-/// ranks a node's children by the plane through the centres of the nearest
-/// nodes of its depth, coder 2 (8.3) also by their distance from the other
-/// nodes (a weight per depth); coder 3 replaces the neighbours already
-/// decoded by their occupied children and may rank by a quadric instead of
-/// the plane (a flag per depth); coder 5's weight 16 ranks by the distance
-/// from those points alone, farthest first (volume interiors). The encoder
-/// ranks a depth only when that saves at least 2% of the depth's bits,
-/// since every ranked node costs the decoder a nearest-neighbour search.
-/// `ranked_coder`: 5 (coder 3, 4 or 5), or 4, 3 or 2 to compare with
-/// (tests), or 0 for coder 0 alone (decoding speed); coder 1 is never
-/// written (coder 2 with every weight 0 ranks as it does).
-/// `helpers`: where one is free, it ranks half of each large depth's nodes
-/// (the same stream).
-std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q, std::uint8_t ranked_coder = 5,
-                                      HelperBudget* helpers = nullptr);
+/// (encode_octree) or coder 5, the ranked octree, whichever is smaller by 1%
+/// at least. Coder 5 ranks a node's children by the plane (or, per depth, the
+/// quadric) through the nearest nodes of its depth, those already decoded
+/// replaced by their occupied children, with a gap weight per depth (16:
+/// the far ranking, for volume interiors), each table paired where that is
+/// smaller. The encoder ranks a depth only when that saves at least 2% of the
+/// depth's bits, since every ranked node costs the decoder a
+/// nearest-neighbour search. `coder`: BaseCoder::octree for coder 0 alone
+/// (decoding speed). `helpers`: where one is free, it ranks half of each
+/// large depth's nodes (the same stream).
+std::vector<std::uint8_t> encode_base(const std::vector<GridPoint>& points, int q,
+                                      BaseCoder coder = BaseCoder::ranked, HelperBudget* helpers = nullptr);
 
 /// Decode a BASE payload (coder byte first) of exactly `n` points, in
 /// canonical order; bad_layer for an unknown coder.
 /// `form`: the stream's code-length table syntax (HEAD flag bit 0).
-/// `helpers`: where one is free, the ranked coders' nearest-node searches
+/// `helpers`: where one is free, the ranked coder's nearest-node searches
 /// run on it, ahead of the decoding (same result).
 std::vector<GridPoint> decode_base(const std::uint8_t* data, std::size_t size, int q, std::uint64_t n,
                                    TableForm form = TableForm::deltas, HelperBudget* helpers = nullptr);

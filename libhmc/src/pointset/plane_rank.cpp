@@ -58,7 +58,7 @@ void reduce(std::array<std::int64_t, N>& v, int bits) {
 }
 
 // Coordinates of a point relative to the node's centre in the frame of
-// spec 8A.6: u and v along e_a x n and e_b x n (a < b the axes other than
+// spec 8A.1: u and v along e_a x n and e_b x n (a < b the axes other than
 // the normal's dominant axis j), both perpendicular to n, and the height w
 // along n itself. Exact integers (below 2^46 in magnitude), so exact doubles.
 struct Frame {
@@ -83,7 +83,7 @@ Frame frame_of(const std::array<std::int64_t, 3>& n, std::size_t j) {
   return {cross(a), cross(b), n};
 }
 
-// The quadric of spec 8A.6 through the points neighbours[0 .. f): the height
+// The quadric of spec 8A.1 through the points neighbours[0 .. f): the height
 // w as c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2 by least squares, in
 // binary64 and in the operation order the spec writes (the build sets
 // -ffp-contract=off: no fused multiply-add). False when the normal equations
@@ -195,7 +195,7 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
     below += dot < 0;
   }
   split_ = std::min(above, below);
-  // The quadric keys (spec 8A.6): t_c = k |w_c - quadric(u_c, v_c)|, the
+  // The quadric keys (spec 8A.1): t_c = k |w_c - quadric(u_c, v_c)|, the
   // child's height above the quadric in the plane key's units (w is |n|
   // times a distance along the normal), truncated, at most 2^47.
   const Frame frame = frame_of(n, j);
@@ -224,7 +224,7 @@ ChildKeys::ChildKeys(const GridPoint& p, int d, int q, const Doubled* neighbours
     }
   }
   // Without `with_gaps` no ranking uses g_c: left 0, the far keys order as
-  // (t, e, c), the ranking of spec 8A.8 without neighbours.
+  // (t, e, c), the ranking of spec 8A.1 without neighbours.
   // Per point, the squared offsets along each axis of the children's two
   // centre coordinates, (2X + bit)·h + h/2 for bit 0 and 1, then each
   // child's sum of its three: the same integers, a third of the products.
@@ -269,11 +269,11 @@ __attribute__((always_inline)) inline void ChildKeys::finish(const std::array<st
     packed[c] = static_cast<UInt128>(t[c]) << 64 | static_cast<UInt128>(static_cast<std::uint64_t>(e[c]) << 3 | c);
   const std::array<int, 8> place = ranks_of(packed);
   for (std::size_t c = 0; c < 8; ++c) tie_[c] = static_cast<std::uint8_t>(place[c]);
-  // Far ranking (spec 8A.8): the larger g_c first, then the place by (t, e,
+  // Far ranking (spec 8A.1): the larger g_c first, then the place by (t, e,
   // c): 2^47 - g_c (g_c < 3 * 2^44) from bit 3, the place in bits 0-2.
   for (std::size_t c = 0; c < 8; ++c)
     far_[c] = ((std::uint64_t{1} << 47) - static_cast<std::uint64_t>(g[c])) << 3 | tie_[c];
-  // Gap ranking (spec 8A.4): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
+  // Gap ranking (spec 8A.1): kappa_c = 32 t_c^2 - G k^2 |n|^2 g_c, with g_c
   // the squared distance from the child's centre to its nearest neighbour.
   // t_c / (k |n|) is the child's distance to the plane, so both terms are
   // squared distances times 32 k^2 |n|^2. Magnitudes (spec): below 2^104.

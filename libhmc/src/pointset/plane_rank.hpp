@@ -46,10 +46,10 @@ int popcount8(unsigned v);
 using Doubled = std::array<std::int32_t, 3>;
 
 /// The most points a node's children are ranked by: the cap of the base
-/// coder's causal points (spec 8.4), above the refinement coders' 15.
+/// coder's causal points (spec 8.2), above the refinement coders' 15.
 inline constexpr int kMaxRankPoints = 32;
 
-/// The ranking weight that stands for far ranking (spec 8A.8, REFN coder 7):
+/// The ranking weight that stands for far ranking (spec 8A.1, REFN coder 7):
 /// children farthest from the nearest neighbour first, the plane (or
 /// quadric) and centroid distances only breaking ties.
 inline constexpr int kFarRanking = 16;
@@ -57,14 +57,14 @@ inline constexpr int kFarRanking = 16;
 /// coder 7; the coders before them have 4-bit weights, 0 to 15).
 inline constexpr int kFarWeightBits = 5;
 
-/// The keys that rank a node's children (spec 8A.1 steps 2–4, and 8A.4's
+/// The keys that rank a node's children (spec 8A.1 steps 2–4, and 8A.1's
 /// distances to the nearest neighbour when `with_gaps`), computed once so
 /// that the encoder can rank the children for several gap weights.
 class ChildKeys {
  public:
   /// `gap_from`: the distances to the nearest neighbour skip the first
-  /// gap_from neighbours (the base coder's node itself, spec 8.3). `fit`
-  /// (spec 8A.6): when 6 or more, the plane distances give way to distances
+  /// gap_from neighbours (the base coder's node itself, spec 8.2). `fit`
+  /// (spec 8A.1): when 6 or more, the plane distances give way to distances
   /// from the quadric fitted to the first `fit` neighbours (where that fit
   /// is well posed; `fit` is at most kMaxRankPoints, and a larger one fits
   /// nothing); `neighbours` then holds max(k, fit) points, of which
@@ -79,7 +79,7 @@ class ChildKeys {
   int split() const { return split_; }
   /// The ranking of rank_children (below) for gap weight `gap` (0 to 15;
   /// above 0 only when constructed `with_gaps`), or, for gap = kFarRanking,
-  /// the far ranking of spec 8A.8 (without `with_gaps`, as if no neighbour
+  /// the far ranking of spec 8A.1 (without `with_gaps`, as if no neighbour
   /// were given).
   void order(unsigned first_mask, int gap, std::array<int, 8>& order) const;
   /// ranked_symbol() of `occupancy` (not 0) under that ranking, without
@@ -111,7 +111,7 @@ class ChildKeys {
 /// k `neighbours`, then by distance to their centroid, then by child number.
 /// `split`, when given, receives how many children lie on the smaller side
 /// of that plane (0 to 4; children on the plane count on neither side).
-/// `gap` (0 to 15, spec 8A.4): with gap G > 0 the plane distance t gives way
+/// `gap` (0 to 15, spec 8A.1): with gap G > 0 the plane distance t gives way
 /// to the key 32·t² − G·(squared distance of the child's centre to the
 /// nearest neighbour), both in units of the plane's scale, so that children
 /// far from every neighbour come earlier; gap 0 is the plain ranking.

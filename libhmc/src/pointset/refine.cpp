@@ -20,10 +20,10 @@ namespace hmc::detail {
 namespace {
 
 constexpr int kMaxNeighbours = 15;        // 4-bit header field
-constexpr int kQuadricNeighbours = 10;    // the encoder's quadric fit (coder 5)
-constexpr int kFarNeighbours = 8;         // the encoder's second try of far ranking (coder 7)
+constexpr int kQuadricNeighbours = 10;    // the encoder's quadric fit
+constexpr int kFarNeighbours = 8;         // the encoder's second try of far ranking
 constexpr int kMaxClasses = 4;            // 2-bit header field
-constexpr int kMaxGap = 15;               // 4-bit header field of coder 3
+constexpr int kMaxGap = 15;               // the largest weight below kFarRanking
 constexpr std::uint32_t kAlphabet = 255;  // symbol i codes the i-th non-zero occupancy
 const char* const kWhat = "refinement layer";
 
@@ -168,12 +168,12 @@ class CoarseLevel {
 
   std::uint32_t size() const { return static_cast<std::uint32_t>(keys_.size()); }
   /// K, the number of neighbours that predict a node's children, and F, the
-  /// number the quadric is fitted to (coder 5; below 6: no quadric).
+  /// number the quadric is fitted to (below 6: no quadric).
   void set_neighbours(int k, int fit = 0) {
     neighbours_ = k;
     fit_ = fit;
   }
-  /// The gap weight of each depth's ranking (coders 3 and 4; 0: the plain
+  /// The gap weight of each depth's ranking (0: the plain
   /// ranking); `others`: last_keys() must also rank for other weights.
   void set_gaps(const std::vector<int>& gaps, bool others = false) {
     gaps_ = gaps;
@@ -301,12 +301,12 @@ void check_coarse(const std::vector<GridPoint>& coarse, int q) {
 
 // One coded node: its depth, how many of its children hold coarse points
 // (the context), its symbol, and whether the fitted plane crosses it (at
-// least two children on each side: the plane context of coder 2).
+// least two children on each side: the plane context).
 struct Symbol {
   std::uint8_t depth, weight, index, plane;
 };
 
-// The plane context (spec 8A.3) from the count of children on the smaller
+// The plane context (spec 8A.1) from the count of children on the smaller
 // side of the plane.
 std::uint8_t plane_context(int split) { return split >= 2 ? 1 : 0; }
 
@@ -463,37 +463,40 @@ class Traversal {
 // Which table each (depth, class, plane context) slot uses. Per class and
 // plane context, consecutive depths share a table when that costs fewer bits
 // than a table of their own. Slot (d, k, x) is (d * classes + k) * planes + x,
-// the order of the stream; planes is 1 (coder 0) or 2 (coder 2), either with
-// coder 3.
+// the order of the stream; planes is 1 or 2 (plane contexts, coder 7 only).
 struct TablePlan {
   int classes = 1, planes = 1;
-  std::vector<int> gaps;  // per depth: all 0 coder 0 or 2, all equal coder 3, else coder 4
-  int fit = 0;            // coder 5 when above 0: the quadric's neighbours
+  std::vector<int> gaps;  // per depth: the ranking weight (all 0 with coder 0)
+  int fit = 0;            // when above 0: the quadric's neighbours (coder 7)
   std::vector<bool> fresh;                       // [slot]: a table is sent
   std::vector<int> table;                        // [slot]: the table used, -1 for none
   std::vector<std::vector<std::uint64_t>> freq;  // per table
-  std::vector<bool> paired;                      // per table, coder 6: the paired form (spec 7.4); else empty
+  std::vector<bool> paired;                      // per table: the paired form (spec 7.4); empty: none
   std::uint64_t bits = 0;                        // header, tables and symbols
 };
 
-// Whether some depth ranks far from the neighbours (coder 7).
+// Whether some depth ranks far from the neighbours.
 bool any_far(const std::vector<int>& gaps) {
   return std::any_of(gaps.begin(), gaps.end(), [](int g) { return g == kFarRanking; });
 }
 
-// Whether the depths' gap weights differ (coder 4, or coder 5's per-depth form).
+// Whether the depths' gap weights differ (coder 7's per-depth form).
 bool per_depth(const std::vector<int>& gaps) {
   return std::any_of(gaps.begin(), gaps.end(), [&](int g) { return g != gaps[0]; });
 }
 
-// The coder of a plan, from its quadric and gap weights.
-OctreeCoder coder_of(const TablePlan& p) {
-  if (any_far(p.gaps)) return OctreeCoder::far;
-  if (!p.paired.empty()) return OctreeCoder::paired;
-  if (p.fit > 0) return OctreeCoder::quadric;
-  if (std::all_of(p.gaps.begin(), p.gaps.end(), [](int g) { return g == 0; }))
-    return p.planes == 2 ? OctreeCoder::planes : OctreeCoder::plain;
-  return per_depth(p.gaps) ? OctreeCoder::depth_gaps : OctreeCoder::gap;
+// The coder of a plan: 0 (the short header) when it needs none of the full
+// header's fields, else 7.
+RefineCoder coder_of(const TablePlan& p) {
+  const bool plain = p.planes == 1 && p.fit == 0 && p.paired.empty() &&
+                     std::all_of(p.gaps.begin(), p.gaps.end(), [](int g) { return g == 0; });
+  return plain ? RefineCoder::conditional_octree : RefineCoder::ranked_octree;
+}
+
+// The bits of coder 7's header fields past coder 0's (planes, fit, the flag
+// and the weights; the pair flags are counted per table).
+std::uint64_t full_header_bits(const std::vector<int>& gaps) {
+  return 6 + static_cast<std::uint64_t>(kFarWeightBits) * (per_depth(gaps) ? gaps.size() : 1);
 }
 
 // coded_bits() of the frequency vectors seen before. The plans of one
@@ -539,17 +542,12 @@ TablePlan plan_tables(const Freq& freq, int q, int classes, int planes,
   const auto slots = static_cast<std::size_t>(q * classes * planes);
   plan.fresh.assign(slots, false);
   plan.table.assign(slots, -1);
-  // Header fields (neighbours, classes; coders 3 and 4: planes and the
-  // weights; coder 5: planes, fit, and one weight or one per depth; coder 7:
-  // the same with 5-bit weights), then one flag per slot (and, coder 7, one
-  // per table: added at the end).
-  const OctreeCoder coder = coder_of(plan);
-  const int width = coder == OctreeCoder::far ? kFarWeightBits : 4;
-  plan.bits = 6 + slots + (coder == OctreeCoder::gap          ? 5
-                           : coder == OctreeCoder::depth_gaps ? 1 + 4 * q
-                           : coder == OctreeCoder::quadric || coder == OctreeCoder::far
-                               ? 6 + static_cast<std::uint64_t>(per_depth(gaps) ? width * q : width)
-                               : 0);
+  // Header fields (neighbours, classes; coder 7: planes, fit, and one
+  // weight or one per depth), then one flag per slot (and, coder 7, one per
+  // table: added at the end).
+  const RefineCoder coder = coder_of(plan);
+  const bool full = coder == RefineCoder::ranked_octree;
+  plan.bits = 6 + slots + (full ? full_header_bits(gaps) : 0);
   std::vector<std::uint64_t> f(kAlphabet);
   for (int k = 0; k < classes; ++k)
     for (int x = 0; x < planes; ++x) {
@@ -594,7 +592,7 @@ TablePlan plan_tables(const Freq& freq, int q, int classes, int planes,
       }
       if (current >= 0) plan.bits += current_bits;
     }
-  if (coder == OctreeCoder::far) plan.bits += plan.freq.size();
+  if (full) plan.bits += plan.freq.size();
   return plan;
 }
 
@@ -612,18 +610,15 @@ std::vector<std::vector<std::uint32_t>> sequences(const std::vector<Symbol>& sym
   return out;
 }
 
-// Coder 6 (spec 8A.7): pairs the symbols of the tables where that is
-// smaller, at the cost of a flag per table; returns false, leaving the plan
-// as it is, when it would not make the layer smaller.
+// Pairs the symbols of the tables where that is smaller (spec 7.4, coder
+// 7's pair flags); returns false, leaving the plan as it is, when it would
+// not make the layer smaller.
 bool pair_tables(const std::vector<Symbol>& symbols, TablePlan& plan, bool force = false) {
   const auto seqs = sequences(symbols, plan);
   std::vector<bool> paired(plan.freq.size(), false);
-  // Coder 6's header is coder 5's (the fields of coders 3 to 5 that the
-  // plan lacks are written as zeros), plus a flag per table.
-  const OctreeCoder coder = coder_of(plan);
-  std::uint64_t bits = plan.bits + (coder == OctreeCoder::far ? 0 : plan.freq.size());  // coder 7 has its flags
-  if (coder == OctreeCoder::plain || coder == OctreeCoder::planes) bits += 1 + 4 + 1 + 4;  // planes, F, flag, G
-  else if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps) bits += 4 + 1;    // F, flag
+  // A coder 0 plan becomes coder 7: its header fields and a flag per table.
+  std::uint64_t bits = plan.bits;
+  if (coder_of(plan) == RefineCoder::conditional_octree) bits += full_header_bits(plan.gaps) + plan.freq.size();
   bool any = false;
   for (std::size_t t = 0; t < seqs.size(); ++t) {
     const std::uint64_t plain = coded_bits(plan.freq[t]);
@@ -640,9 +635,8 @@ bool pair_tables(const std::vector<Symbol>& symbols, TablePlan& plan, bool force
 }
 
 std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const TablePlan& plan, int neighbours) {
-  const OctreeCoder coder = coder_of(plan);
-  // Coders 6 and 7 send a flag per table; without a pairing plan, all 0.
-  const bool flagged = coder == OctreeCoder::paired || coder == OctreeCoder::far;
+  // Coder 7 sends a flag per table; without a pairing plan, all 0.
+  const bool flagged = coder_of(plan) == RefineCoder::ranked_octree;
   auto seqs = sequences(symbols, plan);
   std::vector<TableCode> codes;
   for (std::size_t t = 0; t < seqs.size(); ++t)
@@ -650,17 +644,14 @@ std::vector<std::uint8_t> write_layer(const std::vector<Symbol>& symbols, const 
   BitWriter w;
   w.put(static_cast<std::uint32_t>(neighbours), 4);
   w.put(static_cast<std::uint32_t>(plan.classes - 1), 2);
-  if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || coder == OctreeCoder::quadric || flagged) {
+  if (flagged) {
     w.put(static_cast<std::uint32_t>(plan.planes - 1), 1);
     const bool varies = per_depth(plan.gaps);
-    if (coder == OctreeCoder::quadric || flagged) {
-      w.put(static_cast<std::uint32_t>(plan.fit), 4);
-      w.put(varies ? 1u : 0u, 1);
-    }
-    const int width = coder == OctreeCoder::far ? kFarWeightBits : 4;
-    if (!varies) w.put(static_cast<std::uint32_t>(plan.gaps[0]), width);
+    w.put(static_cast<std::uint32_t>(plan.fit), 4);
+    w.put(varies ? 1u : 0u, 1);
+    if (!varies) w.put(static_cast<std::uint32_t>(plan.gaps[0]), kFarWeightBits);
     else
-      for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), width);
+      for (int g : plan.gaps) w.put(static_cast<std::uint32_t>(g), kFarWeightBits);
   }
   for (std::size_t slot = 0; slot < plan.fresh.size(); ++slot) {
     w.put(plan.fresh[slot] ? 1u : 0u, 1);
@@ -695,7 +686,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
                              [](int g) { return g < 0 || (g > kMaxGap && g != kFarRanking); })))
     fail(Status::invalid_argument, std::string(kWhat) + ": parameters out of range");
   if (added_in.empty()) {
-    if (!forced) return {static_cast<std::uint8_t>(OctreeCoder::plain), {}};
+    if (!forced) return {static_cast<std::uint8_t>(RefineCoder::conditional_octree), {}};
     TablePlan p;
     p.planes = forced->plane_contexts ? 2 : 1;
     p.gaps = gaps_of(*forced, q);
@@ -713,8 +704,8 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     if (std::binary_search(coarse.begin(), coarse.end(), morton_point(key, q)))
       fail(Status::invalid_argument, std::string(kWhat) + ": an added point is also a coarse point");
 
-  // Coder 2 (plane contexts) doubles the tables; it is kept only when the
-  // stream it gives is smaller.
+  // Plane contexts double the tables; they are kept only when the stream
+  // they give is smaller.
   std::vector<int> plane_choices{1};
   if (forced) plane_choices = {forced->plane_contexts ? 2 : 1};
   else if (all_coders) plane_choices = {1, 2};
@@ -746,8 +737,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   const std::size_t depth_rows = 18 * kAlphabet;  // the freq entries of one depth
   // One traversal per neighbour count: it gives the symbols for `gaps` and
   // counts those of every weight in `others`, for every depth. Plans for one
-  // weight at all depths (coder 3), and for each depth's best weight (coder
-  // 4), are compared without symbols; a better ranking is then traversed
+  // weight at all depths, and for each depth's best weight, are compared without symbols; a better ranking is then traversed
   // again for its symbols.
   // The plans of one traversal's symbols (ranked with neighbours, fit and
   // gaps, counted for `others`), kept in `best` when smaller.
@@ -764,8 +754,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     }
     // Each depth's weight: the one whose symbols have the least entropy in
     // that depth's contexts (w, x) (table costs aside; the plan decides),
-    // among the gap weights (mix 0), and also with far ranking (mix 1:
-    // coder 7, whose header costs more, must not displace the mix without).
+    // among the gap weights (mix 0), and also with far ranking (mix 1).
     if (!others.empty()) {
       const int mixes = any_far(others) ? 2 : 1;
       std::vector<std::vector<int>> mixed(2, std::vector<int>(static_cast<std::size_t>(q), 0));
@@ -833,7 +822,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
   } else {
     // The plane through 4 neighbours suits surfaces; the nearest point alone
     // suits volume interiors. With 4 neighbours (and all coders allowed),
-    // coder 3's and 4's gap weights 1 to 12 are tried too, and then coder 5's
+    // the gap weights 1 to 12 and the far ranking are tried too, and then the
     // quadric through 10 neighbours, with the same weights.
     const int neighbours = coarse.size() == 1 ? 1 : 4;
     const std::vector<int> weights{1, 2, 3, 4, 6, 8, 12, kFarRanking};
@@ -858,7 +847,7 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
     // Where far ranking won (volume interiors: added points sit in the holes
     // between coarse points), the nearest of more neighbours marks the
     // holes better.
-    if (all_coders && coder_of(best->plan) == OctreeCoder::far) trial(kFarNeighbours, 0, none, weights);
+    if (all_coders && any_far(best->plan.gaps)) trial(kFarNeighbours, 0, none, weights);
     if (nearest) evaluate(*nearest, 1, 0, none, {});
     else if (neighbours != 1) trial(1, 0, none, {});
   }
@@ -888,22 +877,20 @@ RefinementLayer encode_impl(const std::vector<GridPoint>& coarse_in, const std::
 class Decoder {
  public:
   Decoder(BitReader& in, int q, const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form,
-          OctreeCoder coder)
-      : in_(in), q_(q), n_added_(n_added), planes_(coder == OctreeCoder::plain ? 1 : 2) {
+          RefineCoder coder)
+      : in_(in), q_(q), n_added_(n_added) {
     neighbours_ = static_cast<int>(in.get(4));
     classes_ = static_cast<int>(in.get(2)) + 1;
     std::vector<int> gaps(static_cast<std::size_t>(q), 0);
     int fit = 0;
-    const bool flagged = coder == OctreeCoder::paired || coder == OctreeCoder::far;
-    const bool quadric = coder == OctreeCoder::quadric || flagged;
-    if (coder == OctreeCoder::gap || coder == OctreeCoder::depth_gaps || quadric) {
+    const bool flagged = coder == RefineCoder::ranked_octree;  // the full header
+    if (flagged) {
       planes_ = static_cast<int>(in.get(1)) + 1;
-      if (quadric) fit = static_cast<int>(in.get(4));
-      const bool varies = coder == OctreeCoder::depth_gaps || (quadric && in.get(1) != 0);
-      const int width = coder == OctreeCoder::far ? kFarWeightBits : 4;
-      if (!varies) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(width)));
+      fit = static_cast<int>(in.get(4));
+      const bool varies = in.get(1) != 0;
+      if (!varies) std::fill(gaps.begin(), gaps.end(), static_cast<int>(in.get(kFarWeightBits)));
       else
-        for (int& g : gaps) g = static_cast<int>(in.get(width));
+        for (int& g : gaps) g = static_cast<int>(in.get(kFarWeightBits));
       for (int g : gaps)
         if (g > kFarRanking)
           fail(Status::bad_layer, std::string(kWhat) + ": ranking weight " + std::to_string(g) + " is not 0-16");
@@ -937,7 +924,7 @@ class Decoder {
     for (std::size_t c = 0; c < 8; ++c)
       if (cb[c + 1] > cb[c]) mask |= 1u << c;
     const int k = std::min(popcount8(mask), classes_ - 1);
-    // The ranking first: coder 2's table depends on the plane it fits.
+    // The ranking first: the plane context depends on the plane it fits.
     CoarseLevel::Candidates fresh;
     std::array<int, 8> order{};
     int split = 0;
@@ -995,7 +982,9 @@ RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, co
 
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
                                          const std::vector<GridPoint>& coarse, std::uint64_t n_added, TableForm form,
-                                         OctreeCoder coder) {
+                                         RefineCoder coder) {
+  if (!is_octree_refine_coder(static_cast<std::uint8_t>(coder)))
+    fail(Status::invalid_argument, std::string(kWhat) + ": not a conditional octree coder");
   check_coarse(coarse, q);
   if (n_added == 0) {
     if (size != 0) fail(Status::bad_layer, std::string(kWhat) + ": payload present for zero added points");

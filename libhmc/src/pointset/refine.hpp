@@ -10,52 +10,38 @@
 #include <cstdint>
 #include <vector>
 
+#include "codec/coders.hpp"
 #include "entropy/huffman.hpp"
 #include "hmc/codec.hpp"
 
 namespace hmc::detail {
 
-/// The exact REFN coders (spec 8A): the conditional octree (0), with plane
-/// contexts (2), with plane contexts and gap ranking (3), with a gap weight
-/// per depth (4), with quadric ranking (5), coder 5 with paired tables (6),
-/// and coder 6 with far ranking (7).
-enum class OctreeCoder : std::uint8_t {
-  plain = 0, planes = 2, gap = 3, depth_gaps = 4, quadric = 5, paired = 6, far = 7
-};
-
-/// The header fields of a refinement layer: the number of coarse neighbours
-/// that predict where added points lie (0 to 15; 0 disables the prediction),
-/// the number of context classes (1 to 4), the plane contexts and the gap
-/// weights, and the quadric's neighbours. The coder follows from them: 7 with
-/// a far-ranked depth, 6 with paired tables, 5 with a quadric, else 4 when
-/// the depths' weights differ, 3 when they are equal and above 0, else 2
-/// with plane contexts, else 0.
+/// The header fields of a refinement layer (spec 8A.1): the number of coarse
+/// neighbours that predict where added points lie (0 to 15; 0 disables the
+/// prediction), the number of context classes (1 to 4), and the ranking
+/// fields of the full header. The coder follows from them: 0 (the short
+/// header) when they are all at their defaults, else 7.
 struct RefinementParams {
   int neighbours = 4;
   int classes = 4;
-  /// Coders 2 and 3 (spec 8A.3, 8A.4): tables also chosen by whether the
-  /// plane fitted to the neighbours crosses the node.
+  /// Tables also chosen by whether the plane fitted to the neighbours
+  /// crosses the node (the plane context).
   bool plane_contexts = false;
-  /// Coder 3 (spec 8A.4), 0 to 15: how much a child's distance from the
-  /// nearest neighbour moves it up the ranking (0: not at all, coders 0, 2);
-  /// kFarRanking (16) for every depth: coder 7's far ranking.
+  /// 0 to 15: how much a child's distance from the nearest neighbour moves
+  /// it up the ranking (0: not at all); kFarRanking (16): the far ranking.
   int gap = 0;
-  /// Coder 4 (spec 8A.5): when not empty, q weights (0 to 15), one per
-  /// depth, in place of `gap`. Coder 7 (spec 8A.8): a weight may also be
-  /// kFarRanking (16), which ranks that depth's children farthest from the
-  /// nearest neighbour first.
+  /// When not empty, q weights (0 to 15 or kFarRanking), one per depth, in
+  /// place of `gap`.
   std::vector<int> depth_gaps;
-  /// Coder 5 (spec 8A.6) when above 0, to 15: the children are ranked by
-  /// their distance from the quadric fitted to this many nearest coarse
-  /// points (none below 6), with the gap weights of coders 3 and 4.
+  /// When above 0, to 15: the children are ranked by their distance from the
+  /// quadric fitted to this many nearest coarse points (none below 6).
   int fit = 0;
-  /// Coder 6 (spec 8A.7): coder 5's header and ranking with a flag per
-  /// table, each table paired (spec 7.4) where that codes it in fewer bits.
+  /// Each table paired (spec 7.4) where that codes it in fewer bits.
   bool paired = false;
 };
 
-/// A refinement layer as the encoder writes it: the REFN coder number (0,
-/// 2, 3, 4, 5, 6 or 7, an OctreeCoder) and its bits.
+/// A refinement layer as the encoder writes it: the REFN coder number (0 or
+/// 7, a RefineCoder) and its bits.
 struct RefinementLayer {
   std::uint8_t coder = 0;
   std::vector<std::uint8_t> bytes;
@@ -74,7 +60,7 @@ std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse
 std::vector<std::uint8_t> encode_refinement(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                             int q, const RefinementParams& params);
 
-/// What the encoder writes: coder 0, 2, 3, 4, 5, 6 or 7, whichever is smallest;
+/// What the encoder writes: coder 0 or 7, whichever is smallest;
 /// with `fast`, the smallest without neighbours (no search while decoding).
 RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, const std::vector<GridPoint>& added,
                                         int q, bool fast = false);
@@ -86,6 +72,7 @@ RefinementLayer encode_refinement_layer(const std::vector<GridPoint>& coarse, co
 /// (invalid_argument otherwise). `coder`: which coder's bits these are.
 std::vector<GridPoint> decode_refinement(const std::uint8_t* data, std::size_t size, int q,
                                          const std::vector<GridPoint>& coarse, std::uint64_t n_added,
-                                         TableForm form = TableForm::deltas, OctreeCoder coder = OctreeCoder::plain);
+                                         TableForm form = TableForm::deltas,
+                                         RefineCoder coder = RefineCoder::conditional_octree);
 
 }  // namespace hmc::detail

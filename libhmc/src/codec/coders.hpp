@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: AGPL-3.0-or-later
+// The layer coders of the format (spec 8 and 8A): the first byte of a BASE
+// or REFN payload. Declared here once; the layer coders (pointset/) and the
+// decoder's dispatch (codec/) use these numbers and nothing else. Since
+// spec 0.25 every other number is bad_layer.
+#pragma once
+
+#include <cstdint>
+
+namespace hmc::detail {
+
+/// BASE coders (spec 8).
+enum class BaseCoder : std::uint8_t {
+  octree = 0,  ///< 8.2: one table per depth, no prediction (hmc enc --fast-decode)
+  ranked = 5   ///< 8.3: ranked occupancies at the depths that mark it (the default)
+};
+
+/// REFN coders (spec 8A).
+enum class RefineCoder : std::uint8_t {
+  conditional_octree = 0,  ///< 8A.1 with the short header (no ranking fields, no pairing)
+  anchored_vq = 1,         ///< 8A.2, lossy (hmc enc --vq-bits)
+  ranked_octree = 7        ///< 8A.1 with the full header (the default)
+};
+
+constexpr bool is_base_coder(std::uint8_t c) {
+  return c == static_cast<std::uint8_t>(BaseCoder::octree) || c == static_cast<std::uint8_t>(BaseCoder::ranked);
+}
+
+/// The exact REFN coders: the conditional octree, either header.
+constexpr bool is_octree_refine_coder(std::uint8_t c) {
+  return c == static_cast<std::uint8_t>(RefineCoder::conditional_octree) ||
+         c == static_cast<std::uint8_t>(RefineCoder::ranked_octree);
+}
+
+}  // namespace hmc::detail
