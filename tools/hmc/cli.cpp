@@ -124,6 +124,15 @@ bool parse_fidelity(const std::string& name, Fidelity& out) {
   return true;
 }
 
+bool format_option(Args& a, const char* command, io::Format& out) {
+  out = io::Format::automatic;
+  if (!a.has("--format")) return true;
+  out = io::format_from_path("x." + a.get("--format"));
+  if (out != io::Format::automatic) return true;
+  std::fprintf(stderr, "%s: unknown --format '%s'\n", command, a.get("--format").c_str());
+  return false;
+}
+
 std::string json_escape(const std::string& s) {
   std::string o = "\"";
   for (unsigned char c : s) {

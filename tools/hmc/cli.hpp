@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hmc/codec.hpp"
+#include "hmc/meshio.hpp"
 #include "hmc/status.hpp"
 
 namespace hmc::cli {
@@ -86,6 +87,11 @@ unsigned threads_option(Args& a);
 /// The `--fidelity` names of enc and analyze: rule, topology, shape, exact.
 /// False (and `out` untouched) for any other name.
 bool parse_fidelity(const std::string& name, Fidelity& out);
+
+/// `--format F` of enc and tile-split: the reader to use whatever IN's
+/// extension, io::Format::automatic when absent. False, after a message
+/// naming `command`, for an unknown name.
+bool format_option(Args& a, const char* command, io::Format& out);
 
 /// A tiny JSON writer producing one object, keys in insertion order.
 class Json {

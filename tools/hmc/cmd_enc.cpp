@@ -116,14 +116,8 @@ int cmd_enc(int argc, char** argv) {
     return kUsage;
   }
   const std::string in = a.positional()[0];
-  io::Format in_format = io::Format::automatic;
-  if (a.has("--format")) {
-    in_format = io::format_from_path("x." + a.get("--format"));
-    if (in_format == io::Format::automatic) {
-      std::fprintf(stderr, "hmc enc: unknown --format '%s'\n", a.get("--format").c_str());
-      return kUsage;
-    }
-  }
+  io::Format in_format;
+  if (!format_option(a, "hmc enc", in_format)) return kUsage;
 
   // Progress on a terminal only: scripts reading stderr get no noise.
   const bool tty = isatty(fileno(stderr)) != 0;

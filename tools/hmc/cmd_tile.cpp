@@ -133,14 +133,8 @@ int cmd_tile_split(int argc, char** argv) {
     return kUsage;
   }
   const std::string in = a.positional()[0];
-  io::Format in_format = io::Format::automatic;
-  if (a.has("--format")) {
-    in_format = io::format_from_path("x." + a.get("--format"));
-    if (in_format == io::Format::automatic) {
-      std::fprintf(stderr, "hmc tile-split: unknown --format '%s'\n", a.get("--format").c_str());
-      return kUsage;
-    }
-  }
+  io::Format in_format;
+  if (!format_option(a, "hmc tile-split", in_format)) return kUsage;
   auto read = io::read_mesh(in, in_format);
   if (!read) return report("cannot read " + in, read.error(), Stage::input);
   Mesh mesh = std::move(read.value());

@@ -23,16 +23,28 @@ Vec3 ScalarQuantizer::dequantize(const GridPoint& p) const noexcept {
 
 namespace hmc::detail {
 
-ScalarQuantizer fit_quantizer(const std::vector<Vec3>& points, int q) {
+namespace {
+
+// The checks both quantizers make of their arguments: q in 1..21, points,
+// and only finite coordinates.
+void check_input(const std::vector<Vec3>& points, int q) {
   if (q < 1 || q > 21) fail(Status::invalid_argument, "bits must be between 1 and 21, got " + std::to_string(q));
   if (points.empty()) fail(Status::invalid_argument, "the input has no points");
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (const double v : points[i])
+      if (!std::isfinite(v))
+        fail(Status::invalid_argument, "point " + std::to_string(i) + " has a " + (std::isnan(v) ? "NaN" : "infinite") +
+                                           " coordinate");
+}
+
+}  // namespace
+
+ScalarQuantizer fit_quantizer(const std::vector<Vec3>& points, int q) {
+  check_input(points, q);
   Vec3 lo = points[0], hi = points[0];
   for (std::size_t i = 0; i < points.size(); ++i)
     for (int a = 0; a < 3; ++a) {
       const double v = points[i][a];
-      if (!std::isfinite(v))
-        fail(Status::invalid_argument, "point " + std::to_string(i) + " has a " + (std::isnan(v) ? "NaN" : "infinite") +
-                                           " coordinate");
       lo[a] = std::min(lo[a], v);
       hi[a] = std::max(hi[a], v);
     }
@@ -56,8 +68,7 @@ ScalarQuantizer fit_quantizer(const std::vector<Vec3>& points, int q) {
 }
 
 ScalarQuantizer lattice_quantizer(const std::vector<Vec3>& points, int q, const Vec3& origin, double step) {
-  if (q < 1 || q > 21) fail(Status::invalid_argument, "bits must be between 1 and 21, got " + std::to_string(q));
-  if (points.empty()) fail(Status::invalid_argument, "the input has no points");
+  check_input(points, q);
   for (double o : origin)
     if (!std::isfinite(o)) fail(Status::invalid_argument, "the lattice origin is not finite");
   if (!(step > 0) || !std::isfinite(step)) fail(Status::invalid_argument, "the lattice step must be finite and > 0");
@@ -71,9 +82,6 @@ ScalarQuantizer lattice_quantizer(const std::vector<Vec3>& points, int q, const 
   for (std::size_t i = 0; i < points.size(); ++i)
     for (int a = 0; a < 3; ++a) {
       const double v = points[i][a];
-      if (!std::isfinite(v))
-        fail(Status::invalid_argument, "point " + std::to_string(i) + " has a " + (std::isnan(v) ? "NaN" : "infinite") +
-                                           " coordinate");
       // The same rounding as quantize(): it must land on the grid unclamped.
       const double t = std::round((v - sq.origin[a]) / sq.step);
       if (!(t >= 0 && t <= top))
