@@ -44,14 +44,14 @@ class Case:
     def path(self, *p):
         return os.path.join(self.work, *p)
 
-    def torus(self, n=20000):
+    def torus(self, n=8000):
         out = self.path("torus.ply")
         if not os.path.exists(out):
             run([self.hmc, "gen", "torus", "--vertices", str(n), "-o", out])
         return out
 
     def tile(self, out, *extra, env=None, check_rc=True):
-        return run([self.hmc, "tile", self.torus(), "-o", self.path(out), "--tile-points", "1500", "--workers", "2",
+        return run([self.hmc, "tile", self.torus(), "-o", self.path(out), "--tile-points", "600", "--workers", "2",
                     "--json"] + list(extra), env=env, check=check_rc)
 
     def untiled(self, *extra):
