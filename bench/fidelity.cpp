@@ -5,7 +5,7 @@
 //
 // usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact]
 //                       [--levels L] [--vq-bits B] [--vq-residual S] [--per-level] [--fit-coarse]
-//                       [--preview R]
+//                       [--preview-ratio R]
 //
 // With --levels or --vq-bits (issue 7, lossy streams) the model goes through
 // the public encoder and decoder instead, with L levels (2 by default) and
@@ -14,7 +14,7 @@
 // compares geometry and topology, not vertex identity: see stream_report().
 // --per-level adds every decoded level's Hausdorff distance to the input
 // surface (a volume's boundary), its topology and its side bytes;
-// --fit-coarse encodes with EncodeOptions::fit_coarse_levels, --preview R with
+// --fit-coarse encodes with EncodeOptions::fit_coarse_levels, --preview-ratio R with
 // EncodeOptions::preview_ratio = R (levels of octree cells below the L levels).
 #include <algorithm>
 #include <chrono>
@@ -334,7 +334,7 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact] [--levels L] [--vq-bits B] "
-                         "[--vq-residual S] [--per-level] [--fit-coarse] [--preview R]\n");
+                         "[--vq-residual S] [--per-level] [--fit-coarse] [--preview-ratio R]\n");
     return 1;
   }
   int q = 12, levels = 0, vq_bits = -1;
@@ -349,7 +349,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--vq-residual") && i + 1 < argc) vq_residual = std::atol(argv[++i]);
     if (!std::strcmp(argv[i], "--per-level")) per_level = true;
     if (!std::strcmp(argv[i], "--fit-coarse")) fit_coarse = true;
-    if (!std::strcmp(argv[i], "--preview") && i + 1 < argc) preview = std::atof(argv[++i]);
+    if (!std::strcmp(argv[i], "--preview-ratio") && i + 1 < argc) preview = std::atof(argv[++i]);
     if (!std::strcmp(argv[i], "--fidelity") && i + 1 < argc) {
       const std::string f = argv[++i];
       fidelity = f == "rule" ? Fidelity::rule : f == "exact" ? Fidelity::exact : f == "topology" ? Fidelity::topology : Fidelity::shape;

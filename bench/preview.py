@@ -1,17 +1,17 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: AGPL-3.0-or-later
 """A preview that arrives first (issue 53): levels of octree cells below the
-independent-set levels (EncodeOptions::preview_ratio, `hmc enc --preview R`)
+independent-set levels (EncodeOptions::preview_ratio, `hmc enc --preview-ratio R`)
 against the independent-set hierarchy alone, on the 13 shared models.
 
 Configurations, each through `bench/fidelity MODEL --levels L --per-level ...`
 (every decoded level against the input surface, a volume's boundary):
-  1L        --levels 1 --preview 0           the 1-level stream, the size base
-  IS4       --levels 4 --preview 0           4 levels of independent sets (the thesis')
-  IS4+fit   --levels 4 --preview 0 --fit-coarse   the same, coarser levels fitted
-  cells     --levels 1 --preview R           the default: octree-cell levels (fitted)
+  1L        --levels 1 --preview-ratio 0           the 1-level stream, the size base
+  IS4       --levels 4 --preview-ratio 0           4 levels of independent sets (the thesis')
+  IS4+fit   --levels 4 --preview-ratio 0 --fit-coarse   the same, coarser levels fitted
+  cells     --levels 1 --preview-ratio R           the default: octree-cell levels (fitted)
                                              down to R of the points
-  IS2+cells --levels 2 --preview R           one independent-set level, then cells
+  IS2+cells --levels 2 --preview-ratio R           one independent-set level, then cells
 
 Writes bench/results/preview.md and, with --pictures, renderings of the
 decoded levels of two models (bench/results/preview/*.png, numpy and
@@ -37,9 +37,9 @@ surf = sorted(os.listdir(os.path.join(args.data, 'surface')))
 models = ['surface/' + f for f in surf] + ['volume/bunny_libigl.mesh', 'volume/hand_libigl.mesh',
                                           'volume/hand_tetgen.node', 'volume/skull_tetgen.node']
 R = args.ratio
-CONFIGS = {'1L': ['--levels', '1', '--preview', '0'], 'IS4': ['--levels', '4', '--preview', '0'],
-           'IS4+fit': ['--levels', '4', '--preview', '0', '--fit-coarse'],
-           'cells': ['--levels', '1', '--preview', R], 'IS2+cells': ['--levels', '2', '--preview', R]}
+CONFIGS = {'1L': ['--levels', '1', '--preview-ratio', '0'], 'IS4': ['--levels', '4', '--preview-ratio', '0'],
+           'IS4+fit': ['--levels', '4', '--preview-ratio', '0', '--fit-coarse'],
+           'cells': ['--levels', '1', '--preview-ratio', R], 'IS2+cells': ['--levels', '2', '--preview-ratio', R]}
 
 
 def run(m, cfg):
@@ -66,13 +66,13 @@ def coarsest(r):
 L = ['# A preview that arrives first (issue 53)', '',
      f'Regenerate: `/usr/bin/python3 bench/preview.py --build build --ratio {R}{" --pictures" if args.pictures else ""}` '
      f'({elapsed:.0f} s, {args.jobs} at a time, {time.strftime("%Y-%m-%d", time.gmtime())}). q = 12, `shape` fidelity. '
-     'Configurations: **1L** `--levels 1 --preview 0` (the size base); **IS4** `--levels 4 --preview 0`, four levels of '
+     'Configurations: **1L** `--levels 1 --preview-ratio 0` (the size base); **IS4** `--levels 4 --preview-ratio 0`, four levels of '
      'independent sets (the thesis\' hierarchy, the 4-level stream of spec 0.24\'s encoder); **IS4+fit** the same with '
-     '`--fit-coarse` (coarser levels corrected towards the input); **cells** `--levels 1 --preview ' + R + '`, the '
+     '`--fit-coarse` (coarser levels corrected towards the input); **cells** `--levels 1 --preview-ratio ' + R + '`, the '
      'default: below the finest level, levels of one point per occupied octree cell (the point nearest the cell\'s '
      'centre) at the finest depth whose cells are at most half the level\'s points, until a level holds at most '
      f'{R} of the points, their reconstruction corrected towards the input surface clustered onto their points; '
-     '**IS2+cells** `--levels 2 --preview ' + R + '`: one level of independent sets, then cells. '
+     '**IS2+cells** `--levels 2 --preview-ratio ' + R + '`: one level of independent sets, then cells. '
      '*Coarsest*: the coarsest level\'s points and prefix bytes (the bytes a client reads to draw it) as shares of the '
      'whole; *whole / 1L*: the whole stream against the 1-level one; *H*: symmetric Hausdorff distance of a decoded '
      'level to the input surface (a volume\'s boundary), sampled at vertices, edge midpoints and centroids, % of the '

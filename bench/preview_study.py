@@ -24,7 +24,7 @@ print('|---|---:|---:|---:|---:|---:|---:|---:|---:|')
 for m in models:
     name=os.path.basename(m).split('.')[0]; w=os.path.join(work,name)
     os.makedirs(w,exist_ok=True)
-    run('enc',D+'/'+m,'-o',w+'/l1.hmc','--threads','1')
+    run('enc',D+'/'+m,'-o',w+'/l1.hmc','--levels','1','--threads','1')
     run('enc',D+'/'+m,'-o',w+'/l4.hmc','--levels','4','--threads','1')
     b1=os.path.getsize(w+'/l1.hmc')
     info=json.loads(run('info',w+'/l4.hmc','--json')); L=info['levels']; tot4=info['bytes']

@@ -159,10 +159,10 @@ def configurations(mesh=True):
     """(label, family, hmc arguments, q)."""
     out = []
     for q in Q_RANGE:
-        out.append(("hmc q%d" % q, "hmc", ["--kind", "points", "--bits", str(q)], q))
+        out.append(("hmc q%d" % q, "hmc", ["--kind", "points", "--bits", str(q), "--levels", "1"], q))
     if mesh:
         for q in MESH_Q:
-            out.append(("mesh q%d" % q, "hmc_mesh", ["--bits", str(q)], q))
+            out.append(("mesh q%d" % q, "hmc_mesh", ["--bits", str(q), "--levels", "1"], q))
     for levels, q, s in LOSSY_FAMILIES:
         for b in LOSSY_BITS:
             args = ["--kind", "points", "--bits", str(q), "--levels", str(levels), "--vq-bits", str(b)]

@@ -70,7 +70,7 @@ def main():
         subprocess.run([hmc, "gen", "torus", "--vertices", str(a.fit_points), "-o", fit], check=True)
     untiled = {}
     for fid in ("exact", "shape"):
-        r = measured([hmc, "enc", fit, "-o", W("fit-%s.hmc" % fid), "--bits", str(a.bits), "--fidelity", fid, "--json"])
+        r = measured([hmc, "enc", fit, "-o", W("fit-%s.hmc" % fid), "--bits", str(a.bits), "--levels", "1", "--fidelity", fid, "--json"])
         untiled[fid] = dict(json.loads(r["out"]), seconds=r["seconds"], rss_kib=r["rss_kib"])
     tiled = {}
     for tp in (a.tile_points, 4 * a.tile_points // 2, a.fit_points // 10):

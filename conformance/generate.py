@@ -948,6 +948,13 @@ ENCODED = [
      "kind volume at q = 21", sec("sqnt", "recon")),
     ("volume-ball-q1", ("gen", "ball", 40, 9), ["--kind", "volume", "--bits", "1"], None,
      "kind volume at q = 1 (the unit cube's six tetrahedra)", sec("recon")),
+    # octree-cell preview levels (hmc enc's default without --levels, here with its ratio named)
+    ("surface-torus-q12-preview", ("gen", "torus", 400, 3), ["--preview-ratio", "0.04"], None,
+     "kind surface, the default preview: octree-cell levels below the finest, each with RCON", sec("refn", "rcon", "recon")),
+    ("volume-ball-q12-preview", ("gen", "ball", 400, 10), ["--kind", "volume", "--preview-ratio", "0.04"], None,
+     "kind volume, octree-cell preview levels", sec("refn", "rcon", "recon")),
+    ("points-ball-q12-preview", ("gen", "ball", 400, 11), ["--kind", "points", "--levels", "2", "--preview-ratio", "0.05"],
+     None, "kind points, one independent-set level then octree-cell levels", sec("base", "refn")),
     # options
     ("surface-boundary-constant", ("gen", "torus", 250, 2), ["--levels", "4", "--boundary", "constant"], None,
      "boundary decimation mode constant", sec("refn", "rcon")),
@@ -1095,6 +1102,16 @@ EDITED = [
     ("truncated-inside-header", ("gen", "ball", 250, 2), ["--levels", "4"], cut_inside("REFN", 0, 5),
      "the stream ends inside a chunk header after the first level", sec("out")),
 ]
+
+# A case that names no levels is one level: without --levels, hmc enc adds
+# preview levels whose number is the encoder's choice (cases that test them
+# name --preview-ratio), and a vector's stream should not move with it.
+def one_level_unless_named(args):
+    return args if "--levels" in args or "--preview-ratio" in args else args + ["--levels", "1"]
+
+
+ENCODED = [(n, i, one_level_unless_named(a), e, c, x) for n, i, a, e, c, x in ENCODED]
+EDITED = [(n, i, one_level_unless_named(a), e, c, x) for n, i, a, e, c, x in EDITED]
 
 
 # ---------------------------------------------------------------- hand-built positive cases

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 
+#include "hmc/codec.hpp"
 #include "hmc/meshio.hpp"
 #include "samples.hpp"
 #include "support/run_hmc.hpp"
@@ -89,6 +90,50 @@ TEST_CASE("enc notes a flat surface's missing connectivity and fewer levels than
   CHECK(r.out.find("\"notes\": []") != std::string::npos);
   r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/t.hmc"));
   CHECK(r.out.find("note:") == std::string::npos);
+}
+
+TEST_CASE("enc without --levels writes a preview: a coarsest level of a few percent, the finest level the input") {
+  const auto dir = testgen::temp_dir("cli_preview_default");
+  REQUIRE(io::write_mesh(dir + "/torus.ply", samples::torus(80, 40)).ok());  // 3,200 points
+  auto levels_of = [&](const std::string& name) {
+    const std::string bytes = slurp(dir + "/" + name);
+    auto info = inspect(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+    REQUIRE(info.ok());
+    std::vector<std::uint64_t> points;
+    for (const auto& l : info.value().levels) points.push_back(l.points);
+    return points;  // coarsest first
+  };
+  auto r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/d.hmc"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  const auto d = levels_of("d.hmc");
+  REQUIRE(d.size() >= 3);
+  CHECK(d.back() == 3200);
+  CHECK(static_cast<double>(d.front()) <= 0.04 * 3200);
+  CHECK(static_cast<double>(d.front()) > 0.005 * 3200);  // still a preview, not a handful of points
+  for (std::size_t i = 1; i < d.size(); ++i) CHECK(d[i] > d[i - 1]);
+  // --levels alone: exactly those levels; --preview-ratio 0: none added.
+  REQUIRE(hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/l1.hmc") + " --levels 1").code == 0);
+  CHECK(levels_of("l1.hmc") == std::vector<std::uint64_t>{3200});
+  REQUIRE(hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/p0.hmc") + " --preview-ratio 0").code == 0);
+  CHECK(levels_of("p0.hmc") == std::vector<std::uint64_t>{3200});
+  // An explicit ratio with --levels 2: one independent-set level, then cells.
+  r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/l2.hmc") + " --levels 2 --preview-ratio 0.1");
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  const auto l2 = levels_of("l2.hmc");
+  REQUIRE(l2.size() >= 3);
+  CHECK(static_cast<double>(l2.front()) <= 0.1 * 3200);
+  // Decoding the default stream gives the input's points at the finest level.
+  r = hmc_run(dir, "dec " + q(dir + "/d.hmc") + " --canonical " + q(dir + "/dd"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  r = hmc_run(dir, "dec " + q(dir + "/l1.hmc") + " --canonical " + q(dir + "/d1"));
+  REQUIRE_MESSAGE(r.code == 0, r.err);
+  CHECK(slurp(dir + "/dd/level-0.points") == slurp(dir + "/d1/level-0.points"));
+  for (const char* bad : {"1", "-0.1", "x", "0.5x"}) {
+    r = hmc_run(dir, "enc " + q(dir + "/torus.ply") + " -o " + q(dir + "/bad.hmc") + " --preview-ratio " + bad);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("--preview-ratio must be a number in [0, 1)") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir + "/bad.hmc"));
+  }
 }
 
 TEST_CASE("dec -o rebuilds only the level it writes; --all-levels rebuilds each, with the same finest mesh") {
@@ -230,7 +275,8 @@ TEST_CASE("canonical points are sorted grid integers, one per line") {
 TEST_CASE("a corrupt stream exits 3 with the error class and writes nothing") {
   const auto dir = testgen::temp_dir("cli_corrupt");
   REQUIRE(io::write_mesh(dir + "/b.ply", samples::random_ball(500, 3)).ok());
-  REQUIRE(hmc_run(dir, "enc " + q(dir + "/b.ply") + " -o " + q(dir + "/b.hmc")).code == 0);
+  // One level: the last chunks before HEND are then the base layer's.
+  REQUIRE(hmc_run(dir, "enc " + q(dir + "/b.ply") + " -o " + q(dir + "/b.hmc") + " --levels 1").code == 0);
   std::string bytes = slurp(dir + "/b.hmc");
   bytes[bytes.size() - 30] = static_cast<char>(bytes[bytes.size() - 30] ^ 0x10);
   std::ofstream(dir + "/bad.hmc", std::ios::binary) << bytes;

@@ -14,6 +14,11 @@ namespace hmc::cli {
 
 namespace {
 
+// hmc enc's preview when neither --levels nor --preview-ratio is given: on
+// the 13 shared models a coarsest level of 0.7-3.9 % of the points in
+// 1.8-5.4 % of the bytes, the whole stream 1.14 times the 1-level one.
+constexpr double kDefaultPreview = 0.04;
+
 std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
   ok = true;
   if (s.empty() || s == "auto") return std::nullopt;
@@ -28,7 +33,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode", "--fit-coarse"},
-         {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio", "--preview",
+         {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio", "--preview-ratio",
           "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads", "--lattice"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
@@ -62,12 +67,18 @@ int cmd_enc(int argc, char** argv) {
       return kUsage;
     }
   }
-  if (a.has("--preview")) {
+  // The default stream is a preview that arrives first: with neither
+  // --levels nor --preview-ratio, the finest level plus octree-cell levels
+  // down to kDefaultPreview of the points (bench/results/preview.md). The
+  // library's EncodeOptions keeps levels = 1, preview_ratio = 0: a program
+  // gets exactly the levels it asks for.
+  if (!a.has("--levels") && !a.has("--preview-ratio")) opt.preview_ratio = kDefaultPreview;
+  if (a.has("--preview-ratio")) {
     char* end = nullptr;
-    const std::string r = a.get("--preview");
+    const std::string r = a.get("--preview-ratio");
     opt.preview_ratio = std::strtod(r.c_str(), &end);
     if (end == r.c_str() || *end || !(opt.preview_ratio >= 0 && opt.preview_ratio < 1)) {
-      std::fprintf(stderr, "hmc enc: --preview must be a number in [0, 1), got '%s'\n", r.c_str());
+      std::fprintf(stderr, "hmc enc: --preview-ratio must be a number in [0, 1), got '%s'\n", r.c_str());
       return kUsage;
     }
   }
@@ -108,7 +119,7 @@ int cmd_enc(int argc, char** argv) {
   if (!a.ok() || a.positional().size() != 1 || (out.empty() && !a.has("--canonical"))) {
     std::fprintf(stderr,
                  "hmc enc: %s\n"
-                 "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--preview R]\n"
+                 "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--preview-ratio R]\n"
                  "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse] [--vq-bits B [--vq-residual S]]\n"
                  "                  [--fast-decode] [--lattice OX,OY,OZ,STEP] [--canonical DIR] [--no-info] [--threads N] [--json]\n"
                  "                  (hmc --help says what each does)\n",
