@@ -255,6 +255,46 @@ static void test_threads(void) {
   free(m.tris);
 }
 
+/* Preview levels: more levels, the coarsest a few percent, the finest the
+ * same points as the 1-level stream's; a bad ratio is refused. */
+static void test_preview(void) {
+  mesh m = make_torus(80, 40);
+  hmc_encoder *e = hmc_encoder_create(NULL);
+  hmc_decoder *plain = hmc_decoder_create(NULL), *prev = hmc_decoder_create(NULL);
+  hmc_encode_options o;
+  uint8_t *bytes = NULL, *one = NULL;
+  size_t size = 0, one_size = 0, n = 0, n1 = 0;
+  uint32_t *p = NULL, *p1 = NULL;
+  hmc_level_info coarsest;
+  CHECK_STATUS(hmc_encoder_set_preview_ratio(NULL, 0.04), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_encoder_set_preview_ratio(e, 1.0), HMC_INVALID_ARGUMENT);
+  CHECK(strstr(hmc_encoder_message(e), "preview ratio") != NULL);
+  CHECK_STATUS(hmc_encoder_set_preview_ratio(e, -0.5), HMC_INVALID_ARGUMENT);
+  CHECK_STATUS(hmc_encoder_encode(e, m.xyz, m.points, m.tris, m.triangles, NULL, 0, &one, &one_size), HMC_OK);
+  CHECK_STATUS(hmc_encoder_set_preview_ratio(e, 0.04), HMC_OK);
+  hmc_encode_options_init(&o); /* the setting survives set_options */
+  CHECK_STATUS(hmc_encoder_set_options(e, &o), HMC_OK);
+  CHECK_STATUS(hmc_encoder_encode(e, m.xyz, m.points, m.tris, m.triangles, NULL, 0, &bytes, &size), HMC_OK);
+  CHECK(size > one_size);
+  CHECK_STATUS(hmc_decoder_decode(plain, one, one_size), HMC_OK);
+  CHECK_STATUS(hmc_decoder_decode(prev, bytes, size), HMC_OK);
+  CHECK(hmc_decoder_level_count(plain) == 1 && hmc_decoder_level_count(prev) >= 3);
+  CHECK_STATUS(hmc_decoder_level_info(prev, 0, &coarsest), HMC_OK);
+  CHECK(coarsest.point_count > 0 && coarsest.point_count <= m.points / 25);
+  CHECK_STATUS(hmc_decoder_level_points(plain, 0, &p1, &n1), HMC_OK);
+  CHECK_STATUS(hmc_decoder_level_points(prev, hmc_decoder_level_count(prev) - 1, &p, &n), HMC_OK);
+  CHECK(n == n1 && n == m.points && memcmp(p, p1, 3 * n * sizeof(uint32_t)) == 0);
+  hmc_free(NULL, p);
+  hmc_free(NULL, p1);
+  hmc_free(NULL, bytes);
+  hmc_free(NULL, one);
+  hmc_decoder_destroy(plain);
+  hmc_decoder_destroy(prev);
+  hmc_encoder_destroy(e);
+  free(m.xyz);
+  free(m.tris);
+}
+
 /* fast_decode: a larger stream with the same points. */
 static void test_fast_decode(void) {
   size_t size = 0, fast_size = 0, count = 0, fast_count = 0;
@@ -751,6 +791,7 @@ int main(void) {
   test_encoder_notes();
   test_threads();
   test_round_trip();
+  test_preview();
   test_fast_decode();
   test_volume();
   for (i = 0; i < sizeof pieces / sizeof pieces[0]; ++i) test_streaming(pieces[i]);

@@ -252,6 +252,18 @@ HMC_API hmc_status hmc_encoder_set_options(hmc_encoder *encoder, const hmc_encod
 HMC_API hmc_status hmc_encoder_set_threads(hmc_encoder *encoder, unsigned threads);
 
 /**
+ * Add preview levels below the independent-set levels (see
+ * `hmc::EncodeOptions::preview_ratio`, and `hmc enc`, which uses 0.04 when
+ * given no --levels): levels that keep one point per occupied octree cell
+ * until a level holds at most `ratio` of the points. The setting survives
+ * hmc_encoder_set_options().
+ * @param encoder the encoder
+ * @param ratio   0 <= ratio < 1 (default 0: none)
+ * @return ::HMC_OK, or ::HMC_INVALID_ARGUMENT when `ratio` is out of range
+ */
+HMC_API hmc_status hmc_encoder_set_preview_ratio(hmc_encoder *encoder, double ratio);
+
+/**
  * Quantize and encode a point set or mesh.
  *
  * The arrays stay the caller's and are only read. Connectivity is optional:

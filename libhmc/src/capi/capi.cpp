@@ -217,6 +217,18 @@ hmc_status hmc_encoder_set_threads(hmc_encoder* encoder, unsigned threads) {
   });
 }
 
+hmc_status hmc_encoder_set_preview_ratio(hmc_encoder* encoder, double ratio) {
+  if (!encoder) return HMC_INVALID_ARGUMENT;
+  return guard(encoder->message, [&]() -> hmc_status {
+    if (!(ratio >= 0 && ratio < 1)) {
+      encoder->message = "preview ratio must be in [0, 1), got " + std::to_string(ratio);
+      return HMC_INVALID_ARGUMENT;
+    }
+    encoder->options.preview_ratio = ratio;
+    return HMC_OK;
+  });
+}
+
 hmc_status hmc_encoder_set_options(hmc_encoder* encoder, const hmc_encode_options* o) {
   if (!encoder) return HMC_INVALID_ARGUMENT;
   return guard(encoder->message, [&]() -> hmc_status {
@@ -245,6 +257,7 @@ hmc_status hmc_encoder_set_options(hmc_encoder* encoder, const hmc_encode_option
     e.write_info = o->write_info != 0;
     e.fast_decode = o->fast_decode != 0;
     e.threads = encoder->options.threads;  // set apart (hmc_encoder_set_threads)
+    e.preview_ratio = encoder->options.preview_ratio;  // and hmc_encoder_set_preview_ratio
     encoder->options = e;
     return HMC_OK;
   });
