@@ -67,7 +67,7 @@ L = ['# A preview that arrives first (issue 53)', '',
      f'Regenerate: `/usr/bin/python3 bench/preview.py --build build --ratio {R}{" --pictures" if args.pictures else ""}` '
      f'({elapsed:.0f} s, {args.jobs} at a time, {time.strftime("%Y-%m-%d", time.gmtime())}). q = 12, `shape` fidelity. '
      'Configurations: **1L** `--levels 1 --preview-ratio 0` (the size base); **IS4** `--levels 4 --preview-ratio 0`, four levels of '
-     'independent sets (the thesis\' hierarchy, the 4-level stream of spec 0.24\'s encoder); **IS4+fit** the same with '
+     'independent sets (the thesis\' hierarchy, `hmc enc --levels 4`); **IS4+fit** the same with '
      '`--fit-coarse` (coarser levels corrected towards the input); **cells** `--levels 1 --preview-ratio ' + R + '`, the '
      'default: below the finest level, levels of one point per occupied octree cell (the point nearest the cell\'s '
      'centre) at the finest depth whose cells are at most half the level\'s points, until a level holds at most '
