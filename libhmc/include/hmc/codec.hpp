@@ -132,10 +132,12 @@ struct EncodeOptions {
   /// level by a fifth or less, so a coarsest level of a few percent of the
   /// points would take dozens of their levels, each dearer than the last;
   /// cells take three or four. On the 13 shared models, 1 level with r =
-  /// 0.04: 3-4 levels, the coarsest 0.7-3.9 % of the points in 1.8-5.4 % of
+  /// 0.04: 3-4 levels, the coarsest 0.7-3.9 % of the points in 1.9-5.7 % of
   /// the bytes, the whole stream 1.14 times the 1-level one (geometric mean;
   /// bench/results/preview.md). A choice of the encoder: the stream is an
-  /// ordinary one, with more levels than `levels`.
+  /// ordinary one, with more levels than `levels`. `hmc enc` uses 0.04 when
+  /// given neither --levels nor --preview-ratio; the library's default
+  /// stays 0, so that a program gets the levels it asks for.
   double preview_ratio = 0;
   /// Linear by default: a constant Dmax chosen on the finest level stalls
   /// on coarser ones, whose vertices are farther from their neighbours' plane.

@@ -225,7 +225,7 @@ LossyTarget clustered_target(const std::vector<GridPoint>& level, const std::vec
   // triangle with opposite orientations cancel (the winding number is their
   // sum). With the input's own indices each merged edge stayed a border
   // edge, and truth_labels' caps over them (as many as the surface's
-  // triangles) made a 20,000-point torus's preview levels 40 times slower
+  // triangles) made a 20,000-point torus's preview levels about 30 times slower
   // to plan than its finest level.
   std::vector<std::uint32_t> representative(level.size(), ~0u);
   for (std::size_t f = 0; f < fine_points.size(); ++f)
