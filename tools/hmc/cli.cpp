@@ -133,6 +133,18 @@ bool format_option(Args& a, const char* command, io::Format& out) {
   return false;
 }
 
+std::string share_option(const Args& a, const std::string& name, Share range, double& out) {
+  if (!a.has(name)) return {};
+  const std::string r = a.get(name);
+  char* end = nullptr;
+  const double v = std::strtod(r.c_str(), &end);
+  const bool in = range == Share::positive ? v > 0 && v <= 1 : v >= 0 && v < 1;
+  if (end == r.c_str() || *end || !in)
+    return name + " must be a number in " + (range == Share::positive ? "(0, 1]" : "[0, 1)") + ", got '" + r + "'";
+  out = v;
+  return {};
+}
+
 std::string json_escape(const std::string& s) {
   std::string o = "\"";
   for (unsigned char c : s) {

@@ -93,6 +93,12 @@ bool parse_fidelity(const std::string& name, Fidelity& out);
 /// naming `command`, for an unknown name.
 bool format_option(Args& a, const char* command, io::Format& out);
 
+/// A share of the points (`--ratio`, `--preview-ratio`): a number in (0, 1]
+/// (Share::positive) or in [0, 1) (Share::below_one), read into `out` when
+/// the option is given. Returns the message for a bad value, else empty.
+enum class Share { positive, below_one };
+std::string share_option(const Args& a, const std::string& name, Share range, double& out);
+
 /// A tiny JSON writer producing one object, keys in insertion order.
 class Json {
  public:

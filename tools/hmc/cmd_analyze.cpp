@@ -450,13 +450,8 @@ int cmd_analyze(int argc, char** argv) {
   const int classes = static_cast<int>(a.get_int("--classes", 16, 1, 64));
   if (!a.ok()) return usage(a.error());
   if (a.positional().size() != 1) return usage("need one input (mesh or .hmc stream)");
-  if (a.has("--ratio")) {
-    char* end = nullptr;
-    const std::string r = a.get("--ratio");
-    eo.removal_ratio = std::strtod(r.c_str(), &end);
-    if (end == r.c_str() || *end || !(eo.removal_ratio > 0 && eo.removal_ratio <= 1))
-      return usage("--ratio must be a number in (0, 1], got '" + r + "'");
-  }
+  if (const std::string bad = share_option(a, "--ratio", Share::positive, eo.removal_ratio); !bad.empty())
+    return usage(bad);
   const std::string kind = a.get("--kind", "auto");
   if (kind == "points") eo.kind = Kind::points;
   else if (kind == "surface") eo.kind = Kind::surface;

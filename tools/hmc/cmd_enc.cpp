@@ -58,30 +58,18 @@ int cmd_enc(int argc, char** argv) {
     std::fprintf(stderr, "hmc enc: --vq-residual needs --vq-bits\n");
     return kUsage;
   }
-  if (a.has("--ratio")) {
-    char* end = nullptr;
-    const std::string r = a.get("--ratio");
-    opt.removal_ratio = std::strtod(r.c_str(), &end);
-    if (end == r.c_str() || *end || !(opt.removal_ratio > 0 && opt.removal_ratio <= 1)) {
-      std::fprintf(stderr, "hmc enc: --ratio must be a number in (0, 1], got '%s'\n", r.c_str());
-      return kUsage;
-    }
-  }
   // The default stream is a preview that arrives first: with neither
   // --levels nor --preview-ratio, the finest level plus octree-cell levels
   // down to kDefaultPreview of the points (bench/results/preview.md). The
   // library's EncodeOptions keeps levels = 1, preview_ratio = 0: a program
   // gets exactly the levels it asks for.
   if (!a.has("--levels") && !a.has("--preview-ratio")) opt.preview_ratio = kDefaultPreview;
-  if (a.has("--preview-ratio")) {
-    char* end = nullptr;
-    const std::string r = a.get("--preview-ratio");
-    opt.preview_ratio = std::strtod(r.c_str(), &end);
-    if (end == r.c_str() || *end || !(opt.preview_ratio >= 0 && opt.preview_ratio < 1)) {
-      std::fprintf(stderr, "hmc enc: --preview-ratio must be a number in [0, 1), got '%s'\n", r.c_str());
+  for (const std::string& bad : {share_option(a, "--ratio", Share::positive, opt.removal_ratio),
+                                 share_option(a, "--preview-ratio", Share::below_one, opt.preview_ratio)})
+    if (!bad.empty()) {
+      std::fprintf(stderr, "hmc enc: %s\n", bad.c_str());
       return kUsage;
     }
-  }
   if (a.has("--lattice")) {
     // ox,oy,oz,step (the grid is one step on all axes; ox,oy,oz,s,s,s is accepted too).
     const auto v = parse_doubles(a.get("--lattice"));

@@ -456,11 +456,17 @@ class LayerJobs {
 // cells are at most half the points.
 DecimationResult octree_cells(const std::vector<GridPoint>& points, int q) {
   const double budget = 0.5 * static_cast<double>(points.size());
+  std::vector<std::uint64_t> keys(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q);
+  // Cells at depth d are the distinct keys >> 3(q - d); a shift keeps the
+  // sorted order, so one sorted copy counts them at every depth.
+  std::vector<std::uint64_t> sorted = keys;
+  std::sort(sorted.begin(), sorted.end());
   auto cells_at = [&](int d) {
-    std::vector<std::uint64_t> keys(points.size());
-    for (std::size_t i = 0; i < points.size(); ++i) keys[i] = morton_key(points[i], q) >> (3 * (q - d));
-    std::sort(keys.begin(), keys.end());
-    return static_cast<std::size_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+    const int s = 3 * (q - d);
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < sorted.size(); ++i) n += i == 0 || (sorted[i] >> s) != (sorted[i - 1] >> s);
+    return n;
   };
   int d = 0;
   while (d < q && static_cast<double>(cells_at(d + 1)) <= budget) ++d;
@@ -468,7 +474,7 @@ DecimationResult octree_cells(const std::vector<GridPoint>& points, int q) {
   // Doubled coordinates: a cell's centre is 2c + 1 cells of half its side.
   std::map<std::uint64_t, std::pair<std::uint64_t, std::size_t>> best;  // cell -> (squared distance, index)
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::uint64_t cell = morton_key(points[i], q) >> (3 * shift);
+    const std::uint64_t cell = keys[i] >> (3 * shift);
     std::uint64_t dist = 0;
     for (int a = 0; a < 3; ++a) {
       if (shift == 0) break;
