@@ -42,7 +42,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 import refdec  # noqa: E402  (ranking of §8A.1 for the hand-built layers, Huffman reader for descriptions)
 
 SIG = bytes([0x89, 0x48, 0x4D, 0x43, 0x0D, 0x0A, 0x1A, 0x0A])
-VERSION = b"\x00\x19"  # version_major, version_minor of the hand-built streams
+VERSION = b"\x00\x1a"  # version_major, version_minor of the hand-built streams
 SPEC = os.path.join(HERE, "..", "spec", "hmc.md")
 
 
@@ -626,7 +626,7 @@ def rice_bits(bw, ranks, k=None, inverted=None):
 def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, border=(), toggles=(),
                  drops=(), class_code_bits=None, filters=None, mask=None, compact=False, group=1, toggle_bits=None,
                  common=None, candidate_contexts=False, vertex_contexts=False, neighbour_contexts=False,
-                 inverted=()):
+                 inverted=(), seal=None):
     """§10. classes: the class of each of the n points (needed when K > 1);
     filters: {filter number: threshold}. compact: flag bit 2, classes in
     groups of `group` points (10.1) and `toggles` as {context: ranks} (10.2),
@@ -635,10 +635,12 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
     candidate_contexts: flag bit 5, 40 toggle contexts (11.5);
     vertex_contexts: flag bit 6, 80 (with candidate_contexts);
     neighbour_contexts: flag bit 7, 240 (with vertex_contexts), the lists
-    of the contexts in `inverted` naming the tetrahedra not toggled."""
+    of the contexts in `inverted` naming the tetrahedra not toggled.
+    seal: filter_mask bit 6, the seal box (x0, y0, z0, x1, y1, z1) after
+    the thresholds (11.3)."""
     filters = filters or {}
     if mask is None:
-        mask = sum(1 << i for i in filters)
+        mask = sum(1 << i for i in filters) | (0x40 if seal is not None else 0)
     if compact:
         flags |= 4
     if common is not None:
@@ -650,6 +652,7 @@ def rcon_payload(n, flags=1, scale_rank=6, multipliers=(1024,), classes=None, bo
     if neighbour_contexts:
         flags |= 128
     out = bytes([flags, scale_rank, mask]) + b"".join(varint(filters[i]) for i in sorted(filters))
+    out += b"".join(varint(b) for b in seal or ())
     out += varint(len(multipliers)) + b"".join(varint(m) for m in multipliers)
     if len(multipliers) > 1:
         if class_code_bits is not None:
@@ -711,6 +714,8 @@ def describe_rcon(payload, n):
     d = refdec.parse_rcon(payload, n)
     for k in ("inherit_border", "classes", "border_list", "toggle_list", "toggle_ranks", "drop_list"):
         d.pop(k)  # the lists refdec.py keeps for its reconstruction
+    if d["seal"] is None:
+        d.pop("seal")  # RCON without a seal box (the form of every stream before 0.26)
     d["filters"] = {str(i): t for i, t in sorted(d["filters"].items())}
     return d
 
@@ -836,6 +841,24 @@ def cylinder(rings, per_ring, radius=1.0, height=3.0):
     return pts, tris
 
 
+def torus_arc(rings, per_ring, R=1.0, r=0.3):
+    """Half a torus, u in [0, pi]: a bent tube open at both ends, whose
+    end loops lie in the plane y = 0 (a tile's piece of a closed surface)."""
+    pts = []
+    for i in range(rings):
+        u = math.pi * i / (rings - 1)
+        for j in range(per_ring):
+            v = 2 * math.pi * j / per_ring
+            w = R + r * math.cos(v)
+            pts.append((round(w * math.cos(u), 4), round(w * math.sin(u), 4), round(r * math.sin(v), 4)))
+    tris = []
+    for i in range(rings - 1):
+        for j in range(per_ring):
+            a, b = i * per_ring + j, i * per_ring + (j + 1) % per_ring
+            tris += [(a, b + per_ring, b), (a, a + per_ring, b + per_ring)]
+    return pts, tris
+
+
 CUBE_PTS = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
 CUBE_TRIS = [(0, 2, 1), (0, 3, 2), (4, 5, 6), (4, 6, 7), (0, 1, 5), (0, 5, 4), (1, 2, 6), (1, 6, 5),
              (2, 3, 7), (2, 7, 6), (3, 0, 4), (3, 4, 7)]
@@ -883,6 +906,7 @@ TETRA4 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
 COPLANAR4 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0)]
 HF = height_field(12, seed=3)
 TUBE = cylinder(6, 16)
+ARC = torus_arc(20, 12)
 VOL4 = kuhn_cube(4)
 VOL5J = kuhn_cube(5, jitter=0.15, seed=7)
 VOL6J = kuhn_cube(6, jitter=0.2, seed=5)
@@ -980,6 +1004,10 @@ ENCODED = [
      "open surface (one border loop), fidelity exact: border, toggle and drop lists", sec("rcon", "recon")),
     ("surface-open-tube-shape", ("off", TUBE[0], TUBE[1]), ["--bits", "10", "--fidelity", "shape"], None,
      "open tube (two border loops), fidelity shape", sec("rcon", "recon")),
+    ("surface-arc-seal-exact", ("off", ARC[0], ARC[1]),
+     ["--bits", "10", "--levels", "2", "--fidelity", "exact", "--seal-box", "0,1,0,1024,1024,1024"], None,
+     "half a torus (a tile's piece) with a seal box that leaves out its end loops (y = 0): the flood "
+     "crosses no face between them; decoded without the seal, its toggle ranks are out of range", sec("rcon", "recon")),
     ("volume-fidelity-exact", ("mesh", VOL5J[0], VOL5J[1]), ["--bits", "10", "--levels", "2", "--fidelity", "exact"], None,
      "kind volume, fidelity exact", sec("rcon", "recon")),
     ("volume-fidelity-rule", ("gen", "ball", 150, 11), ["--kind", "volume", "--levels", "2", "--fidelity", "rule"], None,
@@ -2097,8 +2125,14 @@ NEGATIVE = [
          bw.ue(1), bw.put(1, 5), bw.put(0, 2), [bw.ue(0) for _ in range(7)], bw.bytes(pad_bit=1)))(BitWriter())[-1]))),
     ("neg-rcon-toggle-trailing", "bad_layer", P, "compact toggles: a byte after the bit stream", ["10.2", "13"],
      lambda: surface_one_level(rcon_payload(30, compact=True) + b"\x00")),
-    ("neg-rcon-filter-mask", "bad_layer", P, "RCON filter_mask bit 6 (reserved)", ["10", "13"],
-     lambda: surface_one_level(rcon_payload(30, filters={0: 300}, mask=0x41))),
+    ("neg-rcon-filter-mask", "bad_layer", P, "RCON filter_mask bit 7 (reserved)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, filters={0: 300}, mask=0x81))),
+    ("neg-rcon-seal-empty", "bad_layer", P, "a seal box whose y range is empty (y0 = y1)", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, seal=(0, 5, 0, 16, 5, 16)))),
+    ("neg-rcon-seal-beyond", "bad_layer", P, "a seal box reaching beyond 2^21", ["10", "13"],
+     lambda: surface_one_level(rcon_payload(30, seal=(0, 0, 0, 16, 16, (1 << 21) + 1)))),
+    ("neg-rcon-seal-cut", "bad_layer", P, "an RCON that ends inside its seal box", ["10", "13"],
+     lambda: surface_one_level(bytes([1, 6, 0x40]) + varint(0) + varint(0) + varint(0))),
     ("neg-rcon-threshold-0", "bad_layer", P, "a filter threshold of 0", ["10", "13"],
      lambda: surface_one_level(rcon_payload(30, filters={1: 0}))),
     ("neg-rcon-threshold-range", "bad_layer", P, "a filter threshold of 65536", ["10", "13"],

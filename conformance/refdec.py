@@ -765,8 +765,8 @@ def parse_rcon(payload, n, form=1):
     if not 1 <= k <= 64:
         r.fail("scale_rank %d out of range" % k)
     mask = r.u8()
-    if mask & 0xC0:
-        r.fail("reserved filter_mask bits set (filter_mask = %d)" % mask)
+    if mask & 0x80:
+        r.fail("reserved filter_mask bit 7 set (filter_mask = %d)" % mask)
     thresholds = {}
     for i in range(6):
         if mask >> i & 1:
@@ -776,6 +776,12 @@ def parse_rcon(payload, n, form=1):
             if i == 3 and t != 1:
                 r.fail("threshold %d of filter 3 (lone triangle) is not 1" % t)
             thresholds[i] = t
+    seal = None  # §10, §11.3: filter_mask bit 6, the seal box x0, y0, z0, x1, y1, z1
+    if mask >> 6 & 1:
+        seal = [r.varint() for _ in range(6)]
+        for ax in range(3):
+            if not seal[ax] < seal[3 + ax] <= 1 << 21:
+                r.fail("seal box axis %d [%d, %d) empty or beyond 2^21" % (ax, seal[ax], seal[3 + ax]))
     K = r.varint()
     if not 1 <= K <= 64:
         r.fail("class_count %d out of range" % K)
@@ -870,7 +876,7 @@ def parse_rcon(payload, n, form=1):
     return {"peel": flags & 1, "repair": flags >> 1 & 1, "compact": compact, "class_list": class_list,
             "candidate_contexts": candidate_contexts, "vertex_contexts": vertex_contexts,
             "neighbour_contexts": neighbour_contexts, "inverted": inverted, "scale_rank": k,
-            "filters": thresholds,
+            "filters": thresholds, "seal": seal,
             "multipliers": mult, "class_members": counts, "border": len(border), "toggles": toggles,
             "drops": len(drops),
             # the lists themselves, for the reconstruction (refrecon.py)

@@ -240,10 +240,15 @@ class Level:
         fid, nbr, cand, hull = self.fid, self.nbr, self.cand, self.hull
         inside = [True] * M
         stack = []
+        seal = self.rc.get("seal")
+
+        def sealed(f):  # §11.3: with a seal, no vertex of face f in the box
+            return seal is not None and not any(
+                all(seal[ax] <= self.P[v][ax] < seal[3 + ax] for ax in range(3)) for v in self.faces[f])
         for t in range(M):
             for k in range(4):
                 f = fid[t][k]
-                if hull[f] and not cand[f]:
+                if hull[f] and not cand[f] and not sealed(f):
                     inside[t] = False
                     stack.append(t)
                     break
@@ -251,7 +256,7 @@ class Level:
             t = stack.pop()
             for k in range(4):
                 u = nbr[t][k]
-                if u >= 0 and inside[u] and not cand[fid[t][k]]:
+                if u >= 0 and inside[u] and not cand[fid[t][k]] and not sealed(fid[t][k]):
                     inside[u] = False
                     stack.append(u)
         self.inside = inside

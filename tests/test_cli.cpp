@@ -307,6 +307,30 @@ TEST_CASE("limits: --max-points refuses a larger stream with exit 5") {
   CHECK(r.err.find("limit_exceeded") != std::string::npos);
 }
 
+TEST_CASE("--seal-box: a tile's box goes into every RCON; bad boxes are refused with nothing written") {
+  const auto dir = testgen::temp_dir("cli_seal");
+  REQUIRE(io::write_mesh(dir + "/t.ply", samples::torus(40, 16)).ok());
+  const std::string in = q(dir + "/t.ply"), out = q(dir + "/t.hmc");
+  auto r = hmc_run(dir, "enc " + in + " -o " + out + " --levels 2 --seal-box 0,0,0,2048,4096,4096");
+  REQUIRE(r.code == 0);
+  // Both levels decode (the decoder applies the seal it reads), and the
+  // stream differs from the unsealed one only by what the seal changes.
+  r = hmc_run(dir, "dec " + out + " -o " + q(dir + "/t-out.ply"));
+  CHECK(r.code == 0);
+  const std::string sealed = slurp(dir + "/t.hmc");
+  REQUIRE(hmc_run(dir, "enc " + in + " -o " + q(dir + "/u.hmc") + " --levels 2").code == 0);
+  CHECK(sealed != slurp(dir + "/u.hmc"));
+  fs::remove(dir + "/t.hmc");
+  for (const char* bad : {"0,0,0,2048,4096", "0,0,0,2048,4096,4097", "5,0,0,5,4096,4096", "0,0,0,1.5,4096,4096",
+                          "-1,0,0,8,8,8", "a,b,c,d,e,f"}) {
+    CAPTURE(bad);
+    r = hmc_run(dir, "enc " + in + " -o " + out + " --seal-box " + bad);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("--seal-box") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir + "/t.hmc"));
+  }
+}
+
 TEST_CASE("bad input files exit 2 naming the problem, and leave no output") {
   const auto dir = testgen::temp_dir("cli_badinput");
   std::ofstream(dir + "/nan.xyz") << "0 0 0\n1 2 3\n4 nan 6\n";

@@ -248,7 +248,8 @@ def main(argv):
         jobs = [{"index": i, "hmc": args.hmc, "input": os.path.join(work, t["input"]),
                  "output": os.path.join(tmp, t["file"]), "q": plan["q"], "origin": plan["origin"],
                  "step": plan["step"], "kind": plan["kind"], "levels": args.levels,
-                 "enc_args": ["--fidelity", args.fidelity]} for i, t in enumerate(plan["tiles"])]
+                 "enc_args": ["--fidelity", args.fidelity,
+                              "--seal-box", ",".join(str(b) for b in t["box"])]} for i, t in enumerate(plan["tiles"])]
         done = [0]
 
         def progress(r):

@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <unistd.h>
@@ -34,7 +36,7 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode", "--fit-coarse"},
          {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio", "--preview-ratio",
-          "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads", "--lattice"});
+          "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads", "--lattice", "--seal-box"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
   bool kind_ok = true;
@@ -81,6 +83,25 @@ int cmd_enc(int argc, char** argv) {
     }
     opt.lattice = EncodeOptions::Lattice{{v[0], v[1], v[2]}, v[3]};
   }
+  if (a.has("--seal-box")) {
+    // x0,y0,z0,x1,y1,z1: whole lattice coordinates, x0 < x1 <= 2^q per axis
+    // (the encoder checks the bounds against --bits).
+    const auto v = parse_doubles(a.get("--seal-box"));
+    bool whole = v.size() == 6;
+    std::array<std::uint32_t, 6> box{};
+    for (std::size_t i = 0; whole && i < 6; ++i) {
+      whole = v[i] >= 0 && v[i] <= double(1u << 21) && v[i] == std::floor(v[i]);
+      if (whole) box[i] = static_cast<std::uint32_t>(v[i]);
+    }
+    for (int ax = 0; whole && ax < 3; ++ax) whole = box[ax] < box[3 + ax] && box[3 + ax] <= (1u << opt.bits);
+    if (!whole) {
+      std::fprintf(stderr,
+                   "hmc enc: --seal-box takes x0,y0,z0,x1,y1,z1 in lattice coordinates, 0 <= x0 < x1 <= 2^%d, got '%s'\n",
+                   opt.bits, a.get("--seal-box").c_str());
+      return kUsage;
+    }
+    opt.seal_box = box;
+  }
   const std::string bm = a.get("--boundary", "linear");
   if (bm == "constant") opt.boundary_mode = BoundaryMode::constant;
   else if (bm == "linear") opt.boundary_mode = BoundaryMode::linear;
@@ -109,7 +130,8 @@ int cmd_enc(int argc, char** argv) {
                  "hmc enc: %s\n"
                  "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--preview-ratio R]\n"
                  "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse] [--vq-bits B [--vq-residual S]]\n"
-                 "                  [--fast-decode] [--lattice OX,OY,OZ,STEP] [--canonical DIR] [--no-info] [--threads N] [--json]\n"
+                 "                  [--fast-decode] [--lattice OX,OY,OZ,STEP] [--seal-box X0,Y0,Z0,X1,Y1,Z1]\n"
+                 "                  [--canonical DIR] [--no-info] [--threads N] [--json]\n"
                  "                  (hmc --help says what each does)\n",
                  a.ok() ? "need one input file and -o OUT.hmc" : a.error().c_str());
     return kUsage;

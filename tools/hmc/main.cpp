@@ -56,6 +56,8 @@ const char* kUsage =
     "                          1 = exact)\n"
     "      --lattice OX,OY,OZ,STEP  quantize onto this grid (point i at origin + i * STEP, q = --bits)\n"
     "                          instead of one fitted to the input's box; every point must fall on it\n"
+    "      --seal-box X0,Y0,Z0,X1,Y1,Z1  a tile's box (half-open, lattice units): the reconstruction\n"
+    "                          ignores hull faces between points outside it (hmc tile sets it)\n"
     "      --canonical DIR     also write the canonical dump of every level\n"
     "      --fast-decode       plain octrees that decode without neighbour searches: points decode\n"
     "                          tens of times faster, streams get larger (surfaces by a fifth to a half)\n"

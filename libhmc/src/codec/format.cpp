@@ -372,9 +372,16 @@ std::vector<std::uint8_t> write_recon(const ReconParams& p) {
   std::uint8_t mask = 0;
   for (int i = 0; i < kFilterCount; ++i)
     if (p.filters[static_cast<std::size_t>(i)]) mask = static_cast<std::uint8_t>(mask | (1u << i));
+  if (p.seal) mask = static_cast<std::uint8_t>(mask | (1u << kSealBit));
   w.u8(mask);
   for (int i = 0; i < kFilterCount; ++i)
     if (p.filters[static_cast<std::size_t>(i)]) w.varint(p.filters[static_cast<std::size_t>(i)]);
+  if (p.seal) {
+    for (int ax = 0; ax < 3; ++ax)
+      if (p.seal_box[ax] >= p.seal_box[3 + ax] || p.seal_box[3 + ax] > kSealBound)
+        fail(Status::internal_error, "RCON: an empty or oversized seal box");
+    for (std::uint32_t b : p.seal_box) w.varint(b);
+  }
   w.varint(p.multipliers.size());
   for (std::uint32_t m : p.multipliers) w.varint(m);
   if (p.multipliers.size() > 1) {
@@ -425,13 +432,23 @@ ReconParams read_recon(const ChunkView& c, std::uint64_t points, TableForm form)
   if (p.scale_rank < 1 || p.scale_rank > kMaxScaleRank)
     fail(Status::bad_layer, "RCON: scale rank " + std::to_string(p.scale_rank) + " is outside 1..64");
   const std::uint8_t mask = r.u8();
-  if (mask >> kFilterCount) fail(Status::bad_layer, "RCON: reserved filter bits are set");
+  if (mask >> (kSealBit + 1)) fail(Status::bad_layer, "RCON: reserved filter_mask bit 7 is set");
   for (int i = 0; i < kFilterCount; ++i) {
     if (!(mask & (1u << i))) continue;
     const std::uint64_t t = r.varint();
     if (t < 1 || t > 65535 || (i == kLone && t != 1))
       fail(Status::bad_layer, "RCON: filter " + std::to_string(i) + " threshold " + std::to_string(t) + " is out of range");
     p.filters[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(t);
+  }
+  p.seal = (mask >> kSealBit) & 1u;
+  if (p.seal) {
+    std::array<std::uint64_t, 6> b{};
+    for (auto& v : b) v = r.varint();
+    for (int ax = 0; ax < 3; ++ax)
+      if (b[ax] >= b[3 + ax] || b[3 + ax] > kSealBound)
+        fail(Status::bad_layer, "RCON: seal box axis " + std::to_string(ax) + " [" + std::to_string(b[ax]) + ", " +
+                                    std::to_string(b[3 + ax]) + ") is empty or beyond 2^21");
+    for (int i = 0; i < 6; ++i) p.seal_box[static_cast<std::size_t>(i)] = static_cast<std::uint32_t>(b[static_cast<std::size_t>(i)]);
   }
   const std::uint64_t k = r.varint();
   if (k < 1 || k > kMaxClasses) fail(Status::bad_layer, "RCON: class count " + std::to_string(k) + " is outside 1..64");

@@ -153,6 +153,10 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.surface_points = &surface_gp;
   ti.surface = &surface;
   ti.helpers = helpers;
+  if (options.seal_box) {
+    ti.seal = true;
+    ti.seal_box = *options.seal_box;
+  }
   // Coarser levels only approximate the input; exact fidelity still follows
   // it, and so does any fidelity but the rule's when asked to fit them.
   ti.approximate = coarser && fidelity != Fidelity::exact && !(fit && fidelity != Fidelity::rule);
@@ -505,6 +509,15 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     fail(Status::invalid_argument, "removal ratio must be in (0, 1]");
   if (!(options.preview_ratio >= 0 && options.preview_ratio < 1))
     fail(Status::invalid_argument, "preview ratio must be in [0, 1)");
+  if (options.seal_box) {
+    const auto& b = *options.seal_box;
+    const std::uint64_t size = options.bits >= 1 && options.bits <= 21 ? std::uint64_t{1} << options.bits : kSealBound;
+    for (int ax = 0; ax < 3; ++ax)
+      if (b[ax] >= b[3 + ax] || b[3 + ax] > size)
+        fail(Status::invalid_argument, "seal box: axis " + std::to_string(ax) + " [" + std::to_string(b[ax]) + ", " +
+                                           std::to_string(b[3 + ax]) + ") is empty or beyond the lattice (2^" +
+                                           std::to_string(options.bits) + ")");
+  }
   Encoded out;
   EncodeReport& rep = out.report;
   rep.kind = options.kind ? *options.kind : detect_kind(input);

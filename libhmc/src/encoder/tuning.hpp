@@ -121,6 +121,10 @@ struct TuneInput {
   /// not depend on each other are evaluated two at a time (then decided in
   /// order, so the choice is the same).
   HelperBudget* helpers = nullptr;
+  /// The seal of every trial's parameters (ReconParams::seal, spec 11.3):
+  /// EncodeOptions::seal_box.
+  bool seal = false;
+  std::array<std::uint32_t, 6> seal_box{};
 };
 
 /// Side information for `in.truth`: alpha classes, peeling, the border

@@ -902,12 +902,28 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
       while (parent[x] != x) x = parent[x] = parent[parent[x]];
       return x;
     };
+    // With a seal (spec 0.26), a face with no vertex in the seal box does
+    // not let the flood through.
+    std::vector<std::uint8_t> in_seal;
+    if (p.seal) {
+      in_seal.resize(points.size());
+      for (std::size_t v = 0; v < points.size(); ++v) {
+        bool in = true;
+        for (int ax = 0; ax < 3; ++ax) in = in && points[v][ax] >= p.seal_box[ax] && points[v][ax] < p.seal_box[3 + ax];
+        in_seal[v] = in;
+      }
+    }
     for (std::size_t t = 0; t < nt; ++t)
       for (int k = 0; k < 4; ++k) {
         if (cand[t * 4 + static_cast<std::size_t>(k)]) continue;
         std::uint32_t u = dt.neighbors[t][k];
         if (u == kNoTet) u = static_cast<std::uint32_t>(nt);
         else if (u > t) continue;  // joined from u's side
+        if (p.seal) {
+          const auto& tet = dt.tets[t];
+          if (!in_seal[tet[kFaceVertices[k][0]]] && !in_seal[tet[kFaceVertices[k][1]]] && !in_seal[tet[kFaceVertices[k][2]]])
+            continue;
+        }
         std::uint32_t a = find(static_cast<std::uint32_t>(t)), b = find(u);
         if (a == b) continue;
         if (a < b) std::swap(a, b);

@@ -52,6 +52,14 @@ struct ReconParams {
   /// edge ratio, density, lone triangle (1 = on), neighbour circle radius
   /// ratio, neighbour min/max edge ratio.
   std::array<std::uint32_t, 6> filters{};
+  /// RCON filter_mask bit 6 (spec 0.26): the flood (spec 11.3) crosses no
+  /// face without a vertex in `seal_box` (x0, y0, z0, x1, y1, z1: a
+  /// half-open box of lattice coordinates), as if it were a candidate. A
+  /// tile's stream (spec/tiles.md) is an open piece of a surface; its
+  /// convex hull and the flat tetrahedra along its cuts, all between
+  /// margin points, would let the flood into the inside of the cut solid.
+  bool seal = false;
+  std::array<std::uint32_t, 6> seal_box{};
   /// Border vertices of an open surface (sorted, distinct). As read from
   /// or written to a stream with `border_delta`, the list is the change to
   /// the inherited border instead (see resolve_border()).
@@ -306,5 +314,9 @@ inline std::uint64_t dist2(const GridPoint& a, const GridPoint& b) {
 /// Indices into ReconParams::filters.
 enum FilterId { kCircleRadius = 0, kEdgeRatio = 1, kDensity = 2, kLone = 3, kNeighbourRadius = 4, kNeighbourRatio = 5 };
 constexpr int kFilterCount = 6;
+/// filter_mask bit 6 (spec 0.26): a seal box follows the thresholds; its
+/// upper bounds are at most 2^21, the largest lattice's size.
+constexpr int kSealBit = 6;
+constexpr std::uint32_t kSealBound = 1u << 21;
 
 }  // namespace hmc::detail
