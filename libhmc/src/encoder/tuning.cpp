@@ -759,11 +759,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // fidelity exact: without a seal, 60,035 mismatches to correct and 10,012
   // bytes of RCON; with it, 11,839 and 3,542, against 5,940 bytes for the
   // whole torus.)
-  auto in_box = [&](std::uint32_t v) {
-    for (int ax = 0; ax < 3; ++ax)
-      if (points[v][ax] < in.seal_box[ax] || points[v][ax] >= in.seal_box[3 + ax]) return false;
-    return true;
-  };
+  auto in_box = [&](std::uint32_t v) { return in_seal_box(points[v], in.seal_box); };
   std::vector<std::uint8_t> care;
   if (in.seal) {
     care.resize(nt);

@@ -907,11 +907,7 @@ std::vector<std::uint8_t> rule_labels(const std::vector<GridPoint>& points, cons
     std::vector<std::uint8_t> in_seal;
     if (p.seal) {
       in_seal.resize(points.size());
-      for (std::size_t v = 0; v < points.size(); ++v) {
-        bool in = true;
-        for (int ax = 0; ax < 3; ++ax) in = in && points[v][ax] >= p.seal_box[ax] && points[v][ax] < p.seal_box[3 + ax];
-        in_seal[v] = in;
-      }
+      for (std::size_t v = 0; v < points.size(); ++v) in_seal[v] = in_seal_box(points[v], p.seal_box);
     }
     for (std::size_t t = 0; t < nt; ++t)
       for (int k = 0; k < 4; ++k) {

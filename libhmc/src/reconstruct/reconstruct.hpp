@@ -319,4 +319,12 @@ constexpr int kFilterCount = 6;
 constexpr int kSealBit = 6;
 constexpr std::uint32_t kSealBound = 1u << 21;
 
+/// Whether grid point g lies in the half-open seal box b (spec 11.3): the
+/// one membership test of the flood and of the encoder's tuning.
+inline bool in_seal_box(const GridPoint& g, const std::array<std::uint32_t, 6>& b) {
+  for (int ax = 0; ax < 3; ++ax)
+    if (g[ax] < b[ax] || g[ax] >= b[3 + ax]) return false;
+  return true;
+}
+
 }  // namespace hmc::detail
