@@ -1834,6 +1834,88 @@ TEST_CASE("truth labels: the winding numbers the walk counts, for a closed and a
   CHECK(off_grid.tree.get() != nullptr);
 }
 
+TEST_CASE("truth labels with a seal box: a piece cut off around the box gets the whole surface's labels in it") {
+  // A tile's input (hmc tile-split): the triangles with every vertex in its
+  // box widened by a margin of 4 edge lengths. Closed by caps outside the
+  // box, the piece has the whole torus' labels on every tetrahedron with a
+  // vertex in the box. Boxes: cuts across the tube, one grazing the outer
+  // wall obliquely (a 60,000-point torus cut there had cracks), one whose
+  // corner lies in the tube.
+  const GridTorus g = grid_torus(120, 40);  // edges of about 16 grid units
+  const std::int64_t margin = 64;
+  using Box = std::array<std::uint32_t, 6>;
+  int unsealed_wrong = 0;
+  for (const Box& box : {Box{0, 0, 0, 500, 500, 1024}, Box{691, 500, 0, 1024, 1024, 1024},
+                         Box{287, 240, 0, 500, 500, 1024}, Box{0, 0, 0, 1024, 1024, 470}}) {
+    auto widened = [&](const GridPoint& p) {
+      for (int a = 0; a < 3; ++a)
+        if (std::int64_t{p[a]} < std::int64_t{box[a]} - margin || std::int64_t{p[a]} >= std::int64_t{box[3 + a]} + margin)
+          return false;
+      return true;
+    };
+    std::vector<GridPoint> pts;
+    for (const auto& p : g.points)
+      if (widened(p)) pts.push_back(p);
+    std::sort(pts.begin(), pts.end());
+    std::vector<Triangle> piece, faces;
+    for (const auto& t : g.mesh.triangles)
+      if (widened(g.points[t[0]]) && widened(g.points[t[1]]) && widened(g.points[t[2]])) {
+        piece.push_back(t);
+        Triangle f;
+        for (int k = 0; k < 3; ++k)
+          f[k] = static_cast<std::uint32_t>(std::lower_bound(pts.begin(), pts.end(), g.points[t[k]]) - pts.begin());
+        faces.push_back(f);
+      }
+    const auto dt = delaunay(pts);
+    const auto whole = truth_labels(pts, dt, g.surface_points, g.mesh.triangles, faces);
+    const auto sealed = truth_labels(pts, dt, g.surface_points, piece, faces, nullptr, false, nullptr, &box);
+    const auto unsealed = truth_labels(pts, dt, g.surface_points, piece, faces);
+    std::size_t care = 0, wrong = 0, inside = 0;
+    for (std::size_t t = 0; t < dt.tets.size(); ++t) {
+      bool in = false;
+      for (auto v : dt.tets[t]) in = in || in_seal_box(pts[v], box);
+      if (!in) continue;
+      ++care;
+      inside += whole[t];
+      wrong += sealed[t] != whole[t];
+      unsealed_wrong += unsealed[t] != whole[t];
+    }
+    CAPTURE(box[0]);
+    CAPTURE(box[1]);
+    CHECK(care > 1000);
+    CHECK(inside > care / 10);
+    CHECK(wrong == 0);
+    // Its cut caps lie outside the box and are the ones kept.
+    const ClosedSurface closed(g.surface_points, piece, &box);
+    REQUIRE_FALSE(closed.caps().empty());
+    for (std::size_t c = 0; c < closed.caps().size(); ++c) {
+      CHECK(closed.cap_outside()[c] == 1);
+      const auto& cap = closed.caps()[c];
+      for (double s : {0.1, 0.3, 0.5})
+        for (double r : {0.1, 0.4}) {
+          GridPoint p;
+          for (int a = 0; a < 3; ++a)
+            p[a] = static_cast<std::uint32_t>(std::lround((1 - s - r) * closed.cap_points()[cap[0]][a] +
+                                                          s * closed.cap_points()[cap[1]][a] + r * closed.cap_points()[cap[2]][a]));
+          CHECK_FALSE(in_seal_box(p, box));
+        }
+    }
+  }
+  MESSAGE("labels in the boxes that the piece gets wrong with its caps subtracted: " << unsealed_wrong);
+  CHECK(unsealed_wrong > 0);
+  // Without a box, or with one that holds the border (the surface's own
+  // holes), every cap is subtracted as before.
+  Mesh half = g.mesh;
+  half.triangles.clear();
+  for (const auto& t : g.mesh.triangles)
+    if (g.points[t[0]][0] < 500 && g.points[t[1]][0] < 500 && g.points[t[2]][0] < 500) half.triangles.push_back(t);
+  const Box all{0, 0, 0, 1024, 1024, 1024};
+  for (const ClosedSurface& c : {ClosedSurface(g.surface_points, half.triangles), ClosedSurface(g.surface_points, half.triangles, &all)}) {
+    REQUIRE_FALSE(c.caps().empty());
+    CHECK(std::count(c.cap_outside().begin(), c.cap_outside().end(), std::uint8_t{1}) == 0);
+  }
+}
+
 TEST_CASE("surface topology: components and Euler characteristic, with dense and with wide vertex indices") {
   // A torus: an m x m grid of quads on the unit square with opposite sides
   // glued, two triangles per quad (V = m², E = 3m², F = 2m²: χ = 0).

@@ -138,10 +138,11 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
     const Triangle g{idx[f[0]], idx[f[1]], idx[f[2]]};
     if (g[0] != ~0u && g[1] != ~0u && g[2] != ~0u && g[0] != g[1] && g[1] != g[2] && g[0] != g[2]) faces.push_back(g);
   }
+  const std::array<std::uint32_t, 6>* seal = options.seal_box ? &*options.seal_box : nullptr;
   TuneInput ti;
   double unsure = 0;
   if (!surface.empty())
-    ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, lossy ? nullptr : winding, false, &unsure);
+    ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, lossy ? nullptr : winding, false, &unsure, seal);
   if (kind == Kind::surface) {
     // Level indices: ascending (RCON gap-codes the list) and distinct. A
     // lossy level's points are not in the input's order.
@@ -189,7 +190,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   // per point, 78 % -> 95 % of the reachable triangles.
   if (kind == Kind::surface && !coarser && !lossy && !fine.border.empty() && unsure > kSheetUnsure) {
     TuneInput sheet = ti;
-    sheet.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, winding, true);
+    sheet.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, winding, true, nullptr, seal);
     TuningReport sheet_tr;
     ReconParams sheet_params = tune(plan.points, dt, kind, sheet, fidelity, &sheet_tr);
     if (write_recon(sheet_params).size() < write_recon(plan.params).size()) {

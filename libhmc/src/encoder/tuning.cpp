@@ -583,7 +583,7 @@ std::pair<std::size_t, long> interface_topology(const Tetrahedralization& dt, co
 std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                        const std::vector<Vec3>& surface_points, const std::vector<Triangle>& surface,
                                        const std::vector<Triangle>& input_faces_on_points, WindingCache* cache,
-                                       bool sheet, double* unsure) {
+                                       bool sheet, double* unsure, const std::array<std::uint32_t, 6>* seal_box) {
   const std::size_t nt = dt.tets.size();
   // The structures of an earlier call on the same surface (the input's,
   // level after level) are the same structures.
@@ -591,8 +591,12 @@ std::vector<std::uint8_t> truth_labels(const std::vector<GridPoint>& points, con
   std::shared_ptr<const ClosedSurface> closed = same ? cache->closed : nullptr;
   std::shared_ptr<const WindingNumber> tree = same ? cache->tree : nullptr, caps = same ? cache->caps : nullptr;
   if (!closed && ClosedSurface::exact(surface_points)) {
-    closed = std::make_shared<const ClosedSurface>(surface_points, surface);
-    if (!closed->caps().empty()) caps = std::make_shared<const WindingNumber>(closed->cap_points(), closed->caps());
+    closed = std::make_shared<const ClosedSurface>(surface_points, surface, seal_box);
+    // The caps of cuts around a seal box stay: the surface closed by them.
+    std::vector<Triangle> subtracted;
+    for (std::size_t c = 0; c < closed->caps().size(); ++c)
+      if (!closed->cap_outside()[c]) subtracted.push_back(closed->caps()[c]);
+    if (!subtracted.empty()) caps = std::make_shared<const WindingNumber>(closed->cap_points(), subtracted);
   }
   // The winding number of the surface summed over its triangles: where the
   // closed surface's cannot be counted exactly, and for points off the grid.

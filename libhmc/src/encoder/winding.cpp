@@ -289,7 +289,8 @@ bool ClosedSurface::exact(const std::vector<Vec3>& points) {
   return true;
 }
 
-ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles) {
+ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles,
+                             const std::array<std::uint32_t, 6>* box) {
   // The border: each undirected edge's net use, +1 for every use from its
   // smaller vertex to its larger one, -1 for the other direction.
   std::vector<std::pair<std::uint64_t, int>> uses;
@@ -334,14 +335,78 @@ ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<
       for (int a = 0; a < 3; ++a) s[a] += points[verts[i]][a];
       s[3] += 1;
     }
+    // With a box: per part, its longest edge per axis, then the faces of
+    // the box (bit 2a: below face a's low side, 2a+1: above its high side)
+    // each vertex lies beyond by more than that, the faces all its
+    // vertices share one of (`cut`, one side per axis at most), and the
+    // part's extreme coordinates.
+    std::vector<double> reach(box ? verts.size() : 0, 0);
+    std::vector<std::uint8_t> side(box ? verts.size() : 0, 0);
+    std::vector<std::array<double, 6>> extreme(box ? verts.size() : 0);
+    std::vector<std::int8_t> cut(box ? verts.size() : 0, -1);  // the chosen faces' bits; -1: none fits
+    if (box) {
+      for (const auto& e : border) {
+        double& r = reach[find(local(e[0]))];
+        for (int a = 0; a < 3; ++a) r = std::max(r, std::abs(points[e[0]][a] - points[e[1]][a]));
+      }
+      for (std::uint32_t i = 0; i < verts.size(); ++i) extreme[i] = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+      for (std::uint32_t i = 0; i < verts.size(); ++i) {
+        const Vec3& p = points[verts[i]];
+        const std::uint32_t r = find(i);
+        for (int a = 0; a < 3; ++a) {
+          if (p[a] + reach[r] < (*box)[a]) side[i] |= std::uint8_t(1u << (2 * a));
+          if (p[a] - reach[r] >= (*box)[3 + a]) side[i] |= std::uint8_t(2u << (2 * a));
+          extreme[r][a] = std::min(extreme[r][a], p[a]);
+          extreme[r][3 + a] = std::max(extreme[r][3 + a], p[a]);
+        }
+      }
+      // Candidate face sets, fewest faces first: a set fits a part if every
+      // vertex of it lies beyond one of its faces.
+      std::vector<std::uint8_t> sets;
+      for (int faces = 1; faces <= 3; ++faces)
+        for (int code = 0; code < 27; ++code) {
+          std::uint8_t set = 0;
+          int n = 0;
+          for (int a = 0, c = code; a < 3; ++a, c /= 3)
+            if (c % 3) set |= std::uint8_t((c % 3) << (2 * a)), ++n;
+          if (n == faces) sets.push_back(set);
+        }
+      std::vector<std::uint32_t> members(verts.size());
+      std::iota(members.begin(), members.end(), 0u);
+      std::sort(members.begin(), members.end(), [&](std::uint32_t x, std::uint32_t y) { return find(x) < find(y); });
+      for (std::size_t b = 0; b < members.size();) {
+        std::size_t e = b;
+        const std::uint32_t r = find(members[b]);
+        while (e < members.size() && find(members[e]) == r) ++e;
+        for (const std::uint8_t set : sets) {
+          bool fits = true;
+          for (std::size_t k = b; k < e && fits; ++k) fits = (side[members[k]] & set) != 0;
+          if (fits) {
+            cut[r] = static_cast<std::int8_t>(set);
+            break;
+          }
+        }
+        b = e;
+      }
+    }
     for (std::uint32_t i = 0; i < verts.size(); ++i)
       if (find(i) == i) {
         apex[i] = static_cast<std::uint32_t>(cap_points_.size());
         Vec3 c;  // the mean, on the quarter grid
         for (int a = 0; a < 3; ++a) c[a] = std::round(4 * sum[i][a] / sum[i][3]) / 4;
+        if (box && cut[i] >= 0)  // beyond the cut's faces: its extreme coordinates there
+          for (int a = 0; a < 3; ++a) {
+            const int bits = (cut[i] >> (2 * a)) & 3;
+            if (bits == 1) c[a] = extreme[i][a];
+            if (bits == 2) c[a] = extreme[i][3 + a];
+          }
         cap_points_.push_back(c);
       }
-    for (const auto& e : border) caps_.push_back({apex[find(local(e[0]))], local(e[1]), local(e[0])});
+    for (const auto& e : border) {
+      const std::uint32_t r = find(local(e[0]));
+      caps_.push_back({apex[r], local(e[1]), local(e[0])});
+      cap_outside_.push_back(box && cut[r] >= 0);
+    }
   }
   auto add = [&](const std::array<std::int32_t, 3>& a, const std::array<std::int32_t, 3>& b,
                  const std::array<std::int32_t, 3>& c) {

@@ -78,13 +78,23 @@ double winding_number(const std::vector<Vec3>& points, const std::vector<Triangl
 /// border edges to one apex, so that the surface's winding number is the
 /// closed one's less the caps'.
 ///
+/// With a box (a tile's seal box, EncodeOptions::seal_box), a border part
+/// whose every vertex lies beyond some face of the box by more than the
+/// part's longest edge (per axis), all of them beyond faces of at most one
+/// side per axis, is a cut around the box: its apex goes beyond those faces
+/// too (at the part's extreme coordinate there), so that its cap stays
+/// outside the box (each cap triangle lies within an edge's length of a
+/// segment from the apex to a vertex beyond the same face), and
+/// cap_outside() marks its triangles.
+///
 /// Coordinates are in quarter grid units (4 × grid units; tetrahedron
 /// centroids are then integers): the surface's points must be integers in
 /// [0, 2^22) in grid units (exact() says whether they are).
 class ClosedSurface {
  public:
   using Point = std::array<std::int64_t, 3>;
-  ClosedSurface(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles);
+  ClosedSurface(const std::vector<Vec3>& points, const std::vector<Triangle>& triangles,
+                const std::array<std::uint32_t, 6>* box = nullptr);
   /// Whether `points` (grid units) qualify: finite integers in [0, 2^22).
   static bool exact(const std::vector<Vec3>& points);
 
@@ -101,6 +111,8 @@ class ClosedSurface {
   /// surface was closed.
   const std::vector<Vec3>& cap_points() const { return cap_points_; }
   const std::vector<Triangle>& caps() const { return caps_; }
+  /// Per cap triangle: 1 when its part is a cut around the box (above).
+  const std::vector<std::uint8_t>& cap_outside() const { return cap_outside_; }
 
  private:
   struct Tri {
@@ -119,6 +131,7 @@ class ClosedSurface {
   std::vector<Box> boxes_;
   std::vector<Vec3> cap_points_;
   std::vector<Triangle> caps_;
+  std::vector<std::uint8_t> cap_outside_;
 };
 
 /// Oriented boundary faces of a tetrahedral mesh (faces used by exactly one
