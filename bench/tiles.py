@@ -98,6 +98,8 @@ def main():
     ap.add_argument("--fit-points", type=int, default=1000000)
     ap.add_argument("--bits", type=int, default=14)
     ap.add_argument("--tile-points", type=int, default=200000)
+    ap.add_argument("--fit-tile-points", type=int, default=None,
+                    help="tile size of the model that fits (section 2; default --tile-points)")
     ap.add_argument("--work", default="/tmp/hmc-tiles-bench")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "tiles.md"))
     a = ap.parse_args()
@@ -130,7 +132,8 @@ def main():
         r = measured([hmc, "enc", fit, "-o", W("fit-%s.hmc" % fid), "--bits", str(a.bits), "--levels", "1", "--fidelity", fid, "--json"])
         untiled[fid] = dict(json.loads(r["out"]), seconds=r["seconds"], rss_kib=r["rss_kib"])
     tiled = {}
-    for tp in (a.tile_points, 4 * a.tile_points // 2, a.fit_points // 10):
+    ft = a.fit_tile_points or a.tile_points
+    for tp in (ft, 2 * ft, a.fit_points // 10):
         out = W("fit-%d.tiles" % tp)
         shutil.rmtree(out, ignore_errors=True)
         r = measured([hmc, "tile", fit, "-o", out, "--bits", str(a.bits), "--tile-points", str(tp), "--workers", "2",
@@ -156,8 +159,10 @@ def main():
     L.append("# Tiled models: parallel encoding, size, region queries (issue 54)")
     L.append("")
     L.append("Regenerate: `/usr/bin/python3 bench/tiles.py --hmc build/bin/hmc --points %d --fit-points %d "
-             "--bits %d --tile-points %d` (%s, %d cores shared with other work; Release build)." %
-             (a.points, a.fit_points, a.bits, a.tile_points, time.strftime("%Y-%m-%d"), os.cpu_count()))
+             "--bits %d --tile-points %d%s` (%s, %d cores shared with other work; Release build)." %
+             (a.points, a.fit_points, a.bits, a.tile_points,
+              " --fit-tile-points %d" % a.fit_tile_points if a.fit_tile_points else "", time.strftime("%Y-%m-%d"),
+              os.cpu_count()))
     L.append("Models: `hmc gen torus` (a closed surface, 2:1 grid of triangles), q = %d, `hmc tile` defaults "
              "(`--fidelity exact`, margin 4 mean edge lengths, 1 level)." % a.bits)
     L.append("")

@@ -329,6 +329,18 @@ TEST_CASE("--seal-box: a tile's box goes into every RCON; bad boxes are refused 
     CHECK(r.err.find("--seal-box") != std::string::npos);
     CHECK_FALSE(fs::exists(dir + "/t.hmc"));
   }
+  // --tolerance-diagonal: a length >= 0; the torus' own diagonal gives the
+  // default stream, and bad lengths are refused with nothing written.
+  REQUIRE(hmc_run(dir, "enc " + in + " -o " + out + " --levels 2 --tolerance-diagonal 0").code == 0);
+  CHECK(slurp(dir + "/t.hmc") == slurp(dir + "/u.hmc"));
+  fs::remove(dir + "/t.hmc");
+  for (const char* bad : {"-1", "nan", "inf", "1,2", "x"}) {
+    CAPTURE(bad);
+    r = hmc_run(dir, "enc " + in + " -o " + out + " --tolerance-diagonal " + bad);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("--tolerance-diagonal") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir + "/t.hmc"));
+  }
 }
 
 TEST_CASE("bad input files exit 2 naming the problem, and leave no output") {

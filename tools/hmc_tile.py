@@ -249,7 +249,8 @@ def main(argv):
                  "output": os.path.join(tmp, t["file"]), "q": plan["q"], "origin": plan["origin"],
                  "step": plan["step"], "kind": plan["kind"], "levels": args.levels,
                  "enc_args": ["--fidelity", args.fidelity,
-                              "--seal-box", ",".join(str(b) for b in t["box"])]} for i, t in enumerate(plan["tiles"])]
+                              "--seal-box", ",".join(str(b) for b in t["box"]),
+                              "--tolerance-diagonal", "%.17g" % plan["diagonal"]]} for i, t in enumerate(plan["tiles"])]
         done = [0]
 
         def progress(r):

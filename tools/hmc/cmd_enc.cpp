@@ -36,7 +36,8 @@ std::optional<Kind> parse_kind(const std::string& s, bool& ok) {
 int cmd_enc(int argc, char** argv) {
   Args a(argc, argv, 2, {"--json", "--no-info", "--fast-decode", "--fit-coarse"},
          {"-o", "--output", "--bits", "--kind", "--canonical", "--format", "--fidelity", "--levels", "--ratio", "--preview-ratio",
-          "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads", "--lattice", "--seal-box"});
+          "--boundary", "--optimizer", "--vq-bits", "--vq-residual", "--threads", "--lattice", "--seal-box",
+           "--tolerance-diagonal"});
   EncodeOptions opt;
   opt.bits = static_cast<int>(a.get_int("--bits", 12, 1, 21));
   bool kind_ok = true;
@@ -102,6 +103,15 @@ int cmd_enc(int argc, char** argv) {
     }
     opt.seal_box = box;
   }
+  if (a.has("--tolerance-diagonal")) {
+    const auto v = parse_doubles(a.get("--tolerance-diagonal"));
+    if (v.size() != 1 || !(v[0] >= 0) || !std::isfinite(v[0])) {
+      std::fprintf(stderr, "hmc enc: --tolerance-diagonal takes one length >= 0 in lattice units, got '%s'\n",
+                   a.get("--tolerance-diagonal").c_str());
+      return kUsage;
+    }
+    opt.tolerance_diagonal = v[0];
+  }
   const std::string bm = a.get("--boundary", "linear");
   if (bm == "constant") opt.boundary_mode = BoundaryMode::constant;
   else if (bm == "linear") opt.boundary_mode = BoundaryMode::linear;
@@ -131,6 +141,7 @@ int cmd_enc(int argc, char** argv) {
                  "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--preview-ratio R]\n"
                  "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse] [--vq-bits B [--vq-residual S]]\n"
                  "                  [--fast-decode] [--lattice OX,OY,OZ,STEP] [--seal-box X0,Y0,Z0,X1,Y1,Z1]\n"
+                 "                  [--tolerance-diagonal L]\n"
                  "                  [--canonical DIR] [--no-info] [--threads N] [--json]\n"
                  "                  (hmc --help says what each does)\n",
                  a.ok() ? "need one input file and -o OUT.hmc" : a.error().c_str());

@@ -216,6 +216,16 @@ int cmd_tile_split(int argc, char** argv) {
     }
   }
 
+  // The whole model's bounding-box diagonal (lattice units): every tile's
+  // encoder measures its tolerances against it (hmc enc --tolerance-diagonal).
+  double diagonal = 0;
+  for (int ax = 0; ax < 3 && !pts.empty(); ++ax) {
+    std::uint32_t lo = UINT32_MAX, hi = 0;
+    for (const auto& p : pts) lo = std::min(lo, p[ax]), hi = std::max(hi, p[ax]);
+    diagonal += double(hi - lo) * double(hi - lo);
+  }
+  diagonal = std::sqrt(diagonal);
+
   std::vector<std::uint32_t> order(pts.size());
   std::iota(order.begin(), order.end(), 0u);
   std::vector<Leaf> leaves;
@@ -240,6 +250,7 @@ int cmd_tile_split(int argc, char** argv) {
   std::string plan = "{\n  \"kind\": \"" + std::string(kind_name(kind)) + "\",\n  \"q\": " + std::to_string(bits) +
                      ",\n  \"origin\": [" + g17(gq.origin[0]) + ", " + g17(gq.origin[1]) + ", " + g17(gq.origin[2]) +
                      "],\n  \"step\": " + g17(gq.step) + ",\n  \"margin\": " + std::to_string(margin) +
+                     ",\n  \"diagonal\": " + g17(diagonal) +
                      ",\n  \"points\": " + std::to_string(pts.size()) + ",\n  \"tiles\": [\n";
   std::vector<std::uint32_t> local(pts.size(), UINT32_MAX);
   const char* ext = kind == Kind::volume ? ".vtk" : ".ply";

@@ -154,6 +154,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   ti.surface_points = &surface_gp;
   ti.surface = &surface;
   ti.helpers = helpers;
+  ti.diagonal = options.tolerance_diagonal;
   if (options.seal_box) {
     ti.seal = true;
     ti.seal_box = *options.seal_box;
@@ -510,6 +511,8 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     fail(Status::invalid_argument, "removal ratio must be in (0, 1]");
   if (!(options.preview_ratio >= 0 && options.preview_ratio < 1))
     fail(Status::invalid_argument, "preview ratio must be in [0, 1)");
+  if (!(options.tolerance_diagonal >= 0 && std::isfinite(options.tolerance_diagonal)))
+    fail(Status::invalid_argument, "tolerance diagonal must be finite and >= 0");
   if (options.seal_box) {
     const auto& b = *options.seal_box;
     const std::uint64_t size = options.bits >= 1 && options.bits <= 21 ? std::uint64_t{1} << options.bits : kSealBound;

@@ -124,6 +124,12 @@ double bbox_diagonal(const std::vector<GridPoint>& points) {
   return std::sqrt(s);
 }
 
+// The length the tolerances are 1/1000 of: the caller's (a tile: the whole
+// model's, EncodeOptions::tolerance_diagonal), else the points' own.
+double reference_diagonal(const std::vector<GridPoint>& points, const TuneInput& in) {
+  return in.diagonal > 0 ? in.diagonal : bbox_diagonal(points);
+}
+
 // Smallest height of a tetrahedron (3V over its largest face area): how far
 // the surface moves when its label flips.
 double height(const std::vector<GridPoint>& points, const std::array<std::uint32_t, 4>& t) {
@@ -357,12 +363,12 @@ std::vector<std::uint32_t> topology_mismatches(const Tetrahedralization& dt, con
 // that stray from the input surface: caps across the holes of an open input.
 std::vector<std::uint32_t> hole_faces(const std::vector<GridPoint>& points, const Tetrahedralization& dt,
                                       const ReconParams& p, const std::vector<Vec3>& surface_points,
-                                      const std::vector<Triangle>& surface) {
+                                      const std::vector<Triangle>& surface, double diagonal) {
   std::vector<std::uint8_t> cand;
   auto labels = rule_labels(points, dt, local_scale(points, dt, p.scale_rank), p, &cand);
   apply_toggles(dt, p, labels, &cand);
   const SurfaceDistance to_input(surface_points, surface);
-  const double tolerance = 1e-3 * bbox_diagonal(points);
+  const double tolerance = 1e-3 * diagonal;
   auto on_border = [&](std::uint32_t v) { return std::binary_search(p.border.begin(), p.border.end(), v); };
   std::vector<std::uint32_t> drops;
   for (std::size_t t = 0; t < dt.tets.size(); ++t) {
@@ -1041,7 +1047,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   } else if (fidelity != Fidelity::rule) {
     const double tolerance = fidelity == Fidelity::exact ? -1.0
                              : in.shape_tolerance >= 0 ? in.shape_tolerance
-                                                       : 1e-3 * bbox_diagonal(points);
+                                                       : 1e-3 * reference_diagonal(points, in);
     const auto& rule = best_labels;  // rule_labels() for best, without the repair
     auto labels = rule;
     std::vector<std::uint8_t> toggled(nt, 0);
@@ -1170,7 +1176,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
   // Hole caps are judged against the input only where the level follows it;
   // coarser levels keep the border rule alone.
   if (kind == Kind::surface && !border.empty() && in.surface && in.surface_points && !in.approximate)
-    best.drops = hole_faces(points, dt, best, *in.surface_points, *in.surface);
+    best.drops = hole_faces(points, dt, best, *in.surface_points, *in.surface, reference_diagonal(points, in));
   if (report) {
     report->mismatches_before_toggles = best_mismatch;
     report->side_bits_estimate = best_bits;

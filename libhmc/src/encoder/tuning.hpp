@@ -114,8 +114,11 @@ struct TuneInput {
   const std::vector<Vec3>* surface_points = nullptr;    ///< grid units
   const std::vector<Triangle>* surface = nullptr;       ///< the input surface, for hole faces
   /// Fidelity::shape leaves mismatched tetrahedra thinner than this (grid
-  /// units) to the rule; negative: 0.1% of the bounding-box diagonal.
+  /// units) to the rule; negative: 0.1% of the diagonal below.
   double shape_tolerance = -1;
+  /// EncodeOptions::tolerance_diagonal: the length the drop list's and
+  /// shape's tolerances are 1/1000 of; 0: the points' bounding-box diagonal.
+  double diagonal = 0;
   /// A coarser level, which only approximates the input: instead of
   /// following `truth`, keep the rule's labels and correct only what makes
   /// the surface unsound (vertices left off it, non-manifold edges).
