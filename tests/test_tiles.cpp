@@ -19,13 +19,14 @@ using namespace hmc;
 
 namespace {
 
-// The points of `m` whose x is below (or at least) `cut`, with the triangles
-// that have all three corners among them.
-Mesh half(const Mesh& m, double cut, bool below) {
+// The points of `m` that `keep` accepts, with the triangles that have all
+// three corners among them.
+template <class Keep>
+Mesh piece(const Mesh& m, Keep keep) {
   Mesh h;
   std::vector<std::uint32_t> local(m.points.size(), UINT32_MAX);
   for (std::size_t i = 0; i < m.points.size(); ++i)
-    if ((m.points[i][0] < cut) == below) {
+    if (keep(m.points[i])) {
       local[i] = static_cast<std::uint32_t>(h.points.size());
       h.points.push_back(m.points[i]);
     }
@@ -33,6 +34,11 @@ Mesh half(const Mesh& m, double cut, bool below) {
     if (local[t[0]] != UINT32_MAX && local[t[1]] != UINT32_MAX && local[t[2]] != UINT32_MAX)
       h.triangles.push_back({local[t[0]], local[t[1]], local[t[2]]});
   return h;
+}
+
+// The points of `m` whose x is below (or at least) `cut`, with their triangles.
+Mesh half(const Mesh& m, double cut, bool below) {
+  return piece(m, [&](const Vec3& p) { return (p[0] < cut) == below; });
 }
 
 }  // namespace
@@ -139,18 +145,7 @@ TEST_CASE("a tile measures its tolerances against the whole model (EncodeOptions
   const double cut = 0.3, margin = 4.0 / (n - 1);
   const auto box_x = static_cast<std::uint32_t>(std::ceil((cut - gq.origin[0]) / gq.step));
   const auto box_y = static_cast<std::uint32_t>(std::ceil((cut - gq.origin[1]) / gq.step));
-  Mesh tile;
-  {
-    std::vector<std::uint32_t> local(field.points.size(), UINT32_MAX);
-    for (std::size_t i = 0; i < field.points.size(); ++i)
-      if (field.points[i][0] < cut + margin && field.points[i][1] < cut + margin) {
-        local[i] = static_cast<std::uint32_t>(tile.points.size());
-        tile.points.push_back(field.points[i]);
-      }
-    for (const auto& t : field.triangles)
-      if (local[t[0]] != UINT32_MAX && local[t[1]] != UINT32_MAX && local[t[2]] != UINT32_MAX)
-        tile.triangles.push_back({local[t[0]], local[t[1]], local[t[2]]});
-  }
+  const Mesh tile = piece(field, [&](const Vec3& p) { return p[0] < cut + margin && p[1] < cut + margin; });
   // Triangles as their corners' grid points, kept where the tile keeps them
   // (first corner in canonical order inside the box).
   using Corners = std::array<GridPoint, 3>;
