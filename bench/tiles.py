@@ -66,6 +66,40 @@ def read_ply(path):
     return v, f["i"].astype(np.int64)
 
 
+def write_terrain(path, n, seed=1, holes=6):
+    """A generated open scene: an n x n height field over the unit square
+    (two waves), Gaussian noise of 0.002 in z (half an edge at n = 250), six
+    round holes; binary PLY."""
+    import numpy as np
+    rng = np.random.default_rng(seed)
+    u = np.linspace(0, 1, n)
+    X, Y = np.meshgrid(u, u, indexing="ij")
+    Z = 0.08 * np.sin(6.1 * X + 1) * np.cos(4.3 * Y) + 0.05 * np.sin(13 * X * Y) + 0.002 * rng.standard_normal(X.shape)
+    P = np.stack([X, Y, Z], -1).reshape(-1, 3)
+    idx = np.arange(n * n).reshape(n, n)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    T = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    centre = P[T].mean(1)
+    keep = np.ones(len(T), bool)
+    for _ in range(holes):
+        h, r = rng.uniform(0.15, 0.85, 2), rng.uniform(0.03, 0.08)
+        keep &= ((centre[:, 0] - h[0]) ** 2 + (centre[:, 1] - h[1]) ** 2) > r * r
+    T = T[keep]
+    used = np.unique(T)
+    m = -np.ones(len(P), np.int64)
+    m[used] = np.arange(len(used))
+    P, T = P[used], m[T]
+    with open(path, "wb") as f:
+        f.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty double x\nproperty double y\n"
+                 "property double z\nelement face %d\nproperty list uchar int vertex_indices\nend_header\n" %
+                 (len(P), len(T))).encode())
+        f.write(P.astype("<f8").tobytes())
+        rec = np.zeros(len(T), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+        rec["n"], rec["i"] = 3, T
+        f.write(rec.tobytes())
+    return len(P), len(T)
+
+
 def surface_check(merged, reference):
     """Edges of the merged surface in other than two triangles, and its
     triangles missing from / extra to the reference (compared by their
@@ -100,6 +134,7 @@ def main():
     ap.add_argument("--tile-points", type=int, default=200000)
     ap.add_argument("--fit-tile-points", type=int, default=None,
                     help="tile size of the model that fits (section 2; default --tile-points)")
+    ap.add_argument("--terrain-side", type=int, default=250, help="grid side of the open scene (section 3)")
     ap.add_argument("--work", default="/tmp/hmc-tiles-bench")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results", "tiles.md"))
     a = ap.parse_args()
@@ -146,7 +181,25 @@ def main():
                        stdout=subprocess.DEVNULL)
         tiled[tp]["check"] = surface_check(W("fit-%d.ply" % tp), W("fit-exact.ply"))
 
-    # 3. A region query on the large model against decoding all of it.
+    # 3. An open, noisy scene: its merged level 0 against its untiled stream.
+    ter = W("terrain-%d.ply" % a.terrain_side)
+    ter_pts, ter_tris = write_terrain(ter, a.terrain_side)
+    r = measured([hmc, "enc", ter, "-o", W("terrain-exact.hmc"), "--bits", str(a.bits), "--levels", "1", "--fidelity",
+                  "exact", "--json"])
+    ter_untiled = dict(json.loads(r["out"]), seconds=r["seconds"])
+    subprocess.run([hmc, "dec", W("terrain-exact.hmc"), "-o", W("terrain-exact.ply")], check=True, stdout=subprocess.DEVNULL)
+    ter_ref = surface_check(W("terrain-exact.ply"), W("terrain-exact.ply"))
+    ter_tiled = {}
+    for tp in (ter_pts // 3, ter_pts // 12):
+        out = W("terrain-%d.tiles" % tp)
+        shutil.rmtree(out, ignore_errors=True)
+        r = measured([hmc, "tile", ter, "-o", out, "--bits", str(a.bits), "--tile-points", str(tp), "--workers", "2",
+                      "--json"])
+        ter_tiled[tp] = dict(json.loads(r["out"]), seconds=r["seconds"])
+        subprocess.run([hmc, "dec", out, "-o", W("terrain-%d.ply" % tp)], check=True, stdout=subprocess.DEVNULL)
+        ter_tiled[tp]["check"] = surface_check(W("terrain-%d.ply" % tp), W("terrain-exact.ply"))
+
+    # 4. A region query on the large model against decoding all of it.
     index = json.load(open(os.path.join(W("big-2.tiles"), "tiles.json")))
     total = sum(t["bytes"] for t in index["tiles"])
     dec_all = measured([hmc, "dec", W("big-2.tiles"), "-o", W("big-all.ply"), "--json"])
@@ -230,7 +283,25 @@ def main():
              "(same command, earlier on 2026-12-07). What is left is the margin's duplicated points "
              "(point-layer column) and the RCON of open pieces.")
     L.append("")
-    L.append("## 3. A region query on the %d-point model" % p2["points"])
+    L.append("## 3. An open scene with noise")
+    L.append("")
+    L.append("A generated height field (`write_terrain`: %d x %d grid over the unit square, two waves, noise of 0.002 in z, "
+             "six round holes): %d points, %d triangles, open borders (its own border edges are the untiled row's "
+             "edges not in 2 triangles)." % (a.terrain_side, a.terrain_side, ter_pts, ter_tris))
+    L.append("")
+    L.append("| stream | tiles | bytes | bits per point | / untiled | wall s | triangles | edges not in 2 triangles | "
+             "missing | extra | duplicates |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    L.append("| untiled, --fidelity exact | 1 | %d | %.3f | 1.000 | %.1f | %d | %d | - | - | %d |" %
+             (ter_untiled["bytes"], ter_untiled["bits_per_point"], ter_untiled["seconds"], ter_ref["triangles"],
+              ter_ref["bad_edges"], ter_ref["duplicates"]))
+    for tp, r in sorted(ter_tiled.items(), reverse=True):
+        c = r["check"]
+        L.append("| tiled, --tile-points %d | %d | %d | %.3f | %.3f | %.1f | %d | %d | %d | %d | %d |" %
+                 (tp, r["tiles"], r["bytes"], r["bits_per_point"], r["bits_per_point"] / ter_untiled["bits_per_point"],
+                  r["seconds"], c["triangles"], c["bad_edges"], c["missing"], c["extra"], c["duplicates"]))
+    L.append("")
+    L.append("## 4. A region query on the %d-point model" % p2["points"])
     L.append("")
     L.append("| decode | tiles read | bytes read | of all bytes | wall s | points out | triangles out |")
     L.append("|---|---|---|---|---|---|---|")
