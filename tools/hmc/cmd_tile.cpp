@@ -183,6 +183,16 @@ int cmd_tile_split(int argc, char** argv) {
   mesh = Mesh{};
   std::vector<std::uint32_t>().swap(to_distinct);
 
+  // The points' bounding box (lattice units): the margin of a point set
+  // without connectivity, and the diagonal every tile's encoder measures
+  // its tolerances against (hmc enc --tolerance-diagonal).
+  std::array<std::uint32_t, 3> box_lo{UINT32_MAX, UINT32_MAX, UINT32_MAX}, box_hi{0, 0, 0};
+  for (const auto& p : pts)
+    for (int ax = 0; ax < 3; ++ax) box_lo[ax] = std::min(box_lo[ax], p[ax]), box_hi[ax] = std::max(box_hi[ax], p[ax]);
+  double diagonal = 0;
+  for (int ax = 0; ax < 3 && !pts.empty(); ++ax) diagonal += double(box_hi[ax] - box_lo[ax]) * double(box_hi[ax] - box_lo[ax]);
+  diagonal = std::sqrt(diagonal);
+
   // Margin: 4 mean edge lengths of the connectivity given, in lattice units.
   std::int64_t margin = 0;
   if (margin_opt >= 0) {
@@ -207,24 +217,10 @@ int cmd_tile_split(int argc, char** argv) {
       margin = static_cast<std::int64_t>(std::ceil(4 * sum / double(count)));
     } else {  // no connectivity given: the spacing of as many points spread through their box
       double vol = 1;
-      for (int ax = 0; ax < 3; ++ax) {
-        std::uint32_t lo = UINT32_MAX, hi = 0;
-        for (const auto& p : pts) lo = std::min(lo, p[ax]), hi = std::max(hi, p[ax]);
-        vol *= double(hi - lo + 1);
-      }
+      for (int ax = 0; ax < 3; ++ax) vol *= double(box_hi[ax] - box_lo[ax] + 1);
       margin = static_cast<std::int64_t>(std::ceil(4 * std::cbrt(vol / double(pts.size()))));
     }
   }
-
-  // The whole model's bounding-box diagonal (lattice units): every tile's
-  // encoder measures its tolerances against it (hmc enc --tolerance-diagonal).
-  double diagonal = 0;
-  for (int ax = 0; ax < 3 && !pts.empty(); ++ax) {
-    std::uint32_t lo = UINT32_MAX, hi = 0;
-    for (const auto& p : pts) lo = std::min(lo, p[ax]), hi = std::max(hi, p[ax]);
-    diagonal += double(hi - lo) * double(hi - lo);
-  }
-  diagonal = std::sqrt(diagonal);
 
   std::vector<std::uint32_t> order(pts.size());
   std::iota(order.begin(), order.end(), 0u);
