@@ -310,8 +310,8 @@ ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<
     for (int m = 0; m < std::abs(net); ++m) border.push_back(net > 0 ? std::array{lo, hi} : std::array{hi, lo});
     i = j;
   }
-  // Caps: one apex per connected part of the border (every vertex of it is
-  // entered as often as left, so the triangles (apex, head, tail) close it).
+  // Caps, per connected part of the border: a fan (apex, head, tail) for a
+  // cut around the box, the part's closed walks halved for any other.
   if (!border.empty()) {
     std::vector<std::uint32_t> verts;
     for (const auto& e : border) verts.insert(verts.end(), e.begin(), e.end());
@@ -389,23 +389,72 @@ ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<
         b = e;
       }
     }
+    // A cut's cap: a fan from its apex beyond the box.
     for (std::uint32_t i = 0; i < verts.size(); ++i)
-      if (find(i) == i) {
+      if (find(i) == i && box && cut[i] >= 0) {
         apex[i] = static_cast<std::uint32_t>(cap_points_.size());
-        Vec3 c;  // the mean, on the quarter grid
-        for (int a = 0; a < 3; ++a) c[a] = std::round(4 * sum[i][a] / sum[i][3]) / 4;
-        if (box && cut[i] >= 0)  // beyond the cut's faces: its extreme coordinates there
-          for (int a = 0; a < 3; ++a) {
-            const int bits = (cut[i] >> (2 * a)) & 3;
-            if (bits == 1) c[a] = extreme[i][a];
-            if (bits == 2) c[a] = extreme[i][3 + a];
-          }
+        Vec3 c;  // beyond the cut's faces: its extreme coordinates there, the mean (on the quarter grid) elsewhere
+        for (int a = 0; a < 3; ++a) {
+          const int bits = (cut[i] >> (2 * a)) & 3;
+          c[a] = bits == 1 ? extreme[i][a] : bits == 2 ? extreme[i][3 + a] : std::round(4 * sum[i][a] / sum[i][3]) / 4;
+        }
         cap_points_.push_back(c);
       }
     for (const auto& e : border) {
       const std::uint32_t r = find(local(e[0]));
+      if (apex[r] == ~0u) continue;
       caps_.push_back({apex[r], local(e[1]), local(e[0])});
-      cap_outside_.push_back(box && cut[r] >= 0);
+      cap_outside_.push_back(1);
+    }
+    // Any other part: its border edges as closed walks (every vertex is
+    // entered as often as left, so a walk can only stop where it began),
+    // each closed by halving: the triangle of its first vertex and those a
+    // third and two thirds along it, then on each arc the triangle of its
+    // ends and its middle vertex, and so on. Its triangles are then as
+    // small as the arcs they span, where a fan from one apex made every
+    // triangle reach across the whole part, so that the caps' winding
+    // number (subtracted at every tetrahedron) could not use its far-field
+    // expansion: a 5,557-edge cut of a 20M-point model's tile (625,002
+    // points, 3.9M tetrahedra) took over 15 minutes there.
+    std::vector<std::uint32_t> first_out(verts.size() + 1, 0), out(border.size());
+    for (const auto& e : border) ++first_out[local(e[0]) + 1];
+    for (std::size_t i = 0; i < verts.size(); ++i) first_out[i + 1] += first_out[i];
+    std::vector<std::uint32_t> next_out(first_out.begin(), first_out.end() - 1);
+    for (std::uint32_t k = 0; k < border.size(); ++k) out[next_out[local(border[k][0])]++] = k;
+    next_out.assign(first_out.begin(), first_out.end() - 1);
+    std::vector<std::uint8_t> used(border.size(), 0);
+    std::vector<std::uint32_t> walk;
+    std::vector<std::array<std::uint32_t, 2>> arcs;
+    for (std::uint32_t k = 0; k < border.size(); ++k) {
+      if (used[k] || apex[find(local(border[k][0]))] != ~0u) continue;
+      const std::uint32_t start = local(border[k][0]);
+      walk.assign(1, start);
+      used[k] = 1;
+      for (std::uint32_t at = local(border[k][1]); at != start;) {
+        while (next_out[at] < first_out[at + 1] && used[out[next_out[at]]]) ++next_out[at];
+        if (next_out[at] == first_out[at + 1]) fail(Status::internal_error, "a border walk is stuck");
+        const std::uint32_t e = out[next_out[at]++];
+        used[e] = 1;
+        walk.push_back(at);
+        at = local(border[e][1]);
+      }
+      const auto m = static_cast<std::uint32_t>(walk.size());
+      if (m < 3) continue;  // there and back: no border
+      auto vertex = [&](std::uint32_t x) { return walk[x % m]; };
+      // (last, middle, first): the walk's own direction reversed, as the fan's.
+      caps_.push_back({vertex(2 * m / 3), vertex(m / 3), vertex(0)});
+      cap_outside_.push_back(0);
+      arcs.assign({{0, m / 3}, {m / 3, 2 * m / 3}, {2 * m / 3, m}});
+      while (!arcs.empty()) {
+        const auto [from, to] = arcs.back();
+        arcs.pop_back();
+        if (to - from < 2) continue;
+        const std::uint32_t mid = from + (to - from) / 2;
+        caps_.push_back({vertex(to), vertex(mid), vertex(from)});
+        cap_outside_.push_back(0);
+        arcs.push_back({from, mid});
+        arcs.push_back({mid, to});
+      }
     }
   }
   auto add = [&](const std::array<std::int32_t, 3>& a, const std::array<std::int32_t, 3>& b,
