@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: AGPL-3.0-or-later
 """Tiled models (spec/tiles.md) through the command line, on generated tori.
 
-usage: tiles_test.py HMC WORKDIR CASE   (CASE: points, closed, kill, atomic, region, pool)
+usage: tiles_test.py HMC WORKDIR CASE   (CASE: points, closed, kill, atomic, region, pool, scheduler)
 
 Each case is one CTest test (tests/CMakeLists.txt). The Dask cases need
 Debian's python3-dask and python3-distributed in the python3 that runs this.
@@ -168,6 +168,51 @@ def case_pool(c):
     names = sorted(os.listdir(c.path("dask")))
     same = all(open(c.path("dask", n), "rb").read() == open(c.path("pool", n), "rb").read() for n in names)
     check(names == sorted(os.listdir(c.path("pool"))) and same, "Dask and the pool write identical files (%d)" % len(names))
+
+
+def case_scheduler(c):
+    """--scheduler ADDRESS: a running scheduler's own workers encode every tile, and the model is the local cluster's."""
+    import socket
+    import time
+    py = os.environ.get("HMC_PYTHON", sys.executable)
+    with socket.socket() as s:  # a free port
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = "tcp://127.0.0.1:%d" % port
+    log = open(c.path("dask.log"), "w")
+    procs = [subprocess.Popen([py, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", str(port),
+                               "--no-dashboard", "--no-show"], stdout=log, stderr=log)]
+    try:
+        # Without a nanny each worker is the process started here, so its
+        # pid is the one the tiles report.
+        for k in range(2):
+            procs.append(subprocess.Popen([py, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
+                                           "--no-nanny", "--no-dashboard", "--name", "hmc-test-%d" % k],
+                                          stdout=log, stderr=log))
+        from dask.distributed import Client
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+        r = c.tile("remote", "--scheduler", address)
+        summary = json.loads(r.stdout)
+        pids = {int(w.rsplit(":", 1)[1]) for w in summary["workers"]}
+        ours = {p.pid for p in procs[1:]}
+        check(pids <= ours and summary["tiles"] >= 12,
+              "all %d tiles ran on the scheduler's two workers (pids %s of %s)" % (summary["tiles"], sorted(pids), sorted(ours)))
+        check(sum(w["tiles"] for w in summary["workers"].values()) == summary["tiles"], "each tile once")
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+        log.close()
+    c.tile("local")
+    names = sorted(os.listdir(c.path("local")))
+    same = all(open(c.path("local", n), "rb").read() == open(c.path("remote", n), "rb").read() for n in names)
+    check(names == sorted(os.listdir(c.path("remote"))) and same,
+          "the scheduler's model and the local cluster's are identical files (%d)" % len(names))
 
 
 if __name__ == "__main__":
