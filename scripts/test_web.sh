@@ -3,7 +3,9 @@
 # The browser half of the test suite (scripts/test.sh runs it after CTest):
 #  1. builds the WebAssembly decoder (scripts/web.sh: emscripten, Node.js);
 #  2. runs the conformance suite's full profile through `node web/cli.mjs`
-#     (every positive vector bit-exact, every negative case its error name);
+#     (every positive vector bit-exact, every negative case its error name),
+#     then a tiled model (web/test/tiles.mjs: merged dumps equal hmc dec's,
+#     region queries over HTTP range requests);
 #  3. installs the viewer's and the test's npm packages (pinned by their
 #     lock files) and the system chromium, and runs web/test/browser.mjs:
 #     headless Chromium opens the viewer on generated 4-level streams and
@@ -35,6 +37,9 @@ t=$(date +%s)
 quiet "conformance through web/cli.mjs" python3 "$HMC_ROOT/conformance/run.py" --profile full \
   --decoder "node $HMC_ROOT/web/cli.mjs dec {in} --canonical {outdir}"
 echo "test_web: conformance (full profile, WebAssembly in Node) took $(( $(date +%s) - t )) s"
+t=$(date +%s)
+quiet "tiled models through web/cli.mjs" node "$HMC_ROOT/web/test/tiles.mjs" --hmc "$HMC_BUILD/bin/hmc"
+echo "test_web: tiled models (WebAssembly in Node against hmc dec) took $(( $(date +%s) - t )) s"
 t=$(date +%s)
 (cd "$HMC_ROOT/web/viewer" && npm ci --no-audit --no-fund --silent)
 (cd "$HMC_ROOT/web/test" && npm ci --no-audit --no-fund --silent)

@@ -5,17 +5,23 @@
 //   node web/cli.mjs dec IN.hmc --canonical DIR [--points-only]
 //                    [--max-points N] [--max-levels N] [--max-memory BYTES]
 //
+//   node web/cli.mjs dec TILED --canonical DIR [--level K]
+//                    [--region xmin,ymin,zmin,xmax,ymax,zmax]
+//
 // writes the canonical dump of spec/conformance.md section 2 as
-// `hmc dec IN.hmc --canonical DIR` does, and exits as `hmc` does: 0 (a cut
+// `hmc dec IN.hmc --canonical DIR` does (for a tiled model, TILED its
+// directory or its tiles.json: the merged levels of spec/tiles.md, from
+// the coarsest down to level K, of the tiles the region needs), and exits as `hmc` does: 0 (a cut
 // stream that still decodes prints a warning), 1 bad command line, 2 input
 // unreadable, 3 invalid stream, 4 output not written, 5 a limit exceeded,
 // 6 out of memory, 70 internal error. An error names the spec's error class
 // on standard error: `hmc: IN: crc_mismatch: ...`.
-import { mkdirSync, readFileSync, writeFileSync } from 'node:fs';
-import { join } from 'node:path';
-import { decode, formatG17, HmcError } from './src/index.mjs';
+import { closeSync, mkdirSync, openSync, readFileSync, readSync, statSync, writeFileSync } from 'node:fs';
+import { dirname, join } from 'node:path';
+import { decode, decodeTiled, formatG17, HmcError } from './src/index.mjs';
 
-const usage = 'usage: node web/cli.mjs dec IN.hmc --canonical DIR [--points-only] [--max-points N] [--max-levels N] [--max-memory BYTES]';
+const usage = 'usage: node web/cli.mjs dec IN.hmc --canonical DIR [--points-only] [--max-points N] [--max-levels N] [--max-memory BYTES]\n' +
+  '       node web/cli.mjs dec TILED --canonical DIR [--level K] [--region xmin,ymin,zmin,xmax,ymax,zmax] [--points-only]';
 
 function parse(argv) {
   if (argv[0] !== 'dec') return null;
@@ -31,6 +37,14 @@ function parse(argv) {
     else if (k === '--max-points') a.maxPoints = Number(value());
     else if (k === '--max-levels') a.maxLevels = Number(value());
     else if (k === '--max-memory') a.maxMemory = Number(value());
+    else if (k === '--level') a.level = Number(value());
+    else if (k === '--region') {
+      a.region = value().split(',').map(Number);
+      if (a.region.length !== 6 || a.region.some((v) => !Number.isFinite(v)) || a.region[0] > a.region[3] ||
+          a.region[1] > a.region[4] || a.region[2] > a.region[5]) {
+        throw new Error('--region takes xmin,ymin,zmin,xmax,ymax,zmax (min <= max)');
+      }
+    }
     else if (k.startsWith('-')) throw new Error(`unknown option ${k}`);
     else if (a.in === null) a.in = k;
     else throw new Error('need one input stream');
@@ -97,21 +111,64 @@ async function main(argv) {
     process.stderr.write(`${usage}\n`);
     return 1;
   }
-  let bytes;
+  let tiled = null;  // the directory of a tiled model
   try {
-    bytes = readFileSync(a.in);
+    tiled = statSync(a.in).isDirectory() ? a.in : a.in.endsWith('tiles.json') ? dirname(a.in) : null;
   } catch (e) {
-    process.stderr.write(`hmc: cannot read ${a.in}: io_error: ${e.message}\n`);
-    return 2;
+    // not there: reading it below says so
+  }
+  if (!tiled && (a.level !== undefined || a.region)) {
+    process.stderr.write(`hmc dec: --level and --region are for a tiled model here\n${usage}\n`);
+    return 1;
   }
   let levels;
-  try {
-    levels = await decode(bytes, { reconstruct: a.reconstruct, maxPoints: a.maxPoints, maxLevels: a.maxLevels,
-      maxMemory: a.maxMemory });
-  } catch (e) {
-    if (!(e instanceof HmcError)) throw e;
-    process.stderr.write(`hmc: ${a.in}: ${e.message}\n`);
-    return EXIT[e.code] || 3;
+  if (tiled) {
+    let index;
+    try {
+      index = readFileSync(join(tiled, 'tiles.json'), 'utf8');
+    } catch (e) {
+      process.stderr.write(`hmc: cannot read ${a.in}: io_error: ${e.message}\n`);
+      return 2;
+    }
+    // A tile's prefix, as a client's range request would fetch it.
+    const fetchPrefix = async (file, bytes, whole) => {
+      const path = join(tiled, file);
+      if (whole) return readFileSync(path);
+      const buf = Buffer.alloc(bytes);
+      const fd = openSync(path, 'r');
+      try {
+        return buf.subarray(0, readSync(fd, buf, 0, bytes, 0));
+      } finally {
+        closeSync(fd);
+      }
+    };
+    try {
+      const r = await decodeTiled(index, fetchPrefix, { level: a.level, region: a.region, allLevels: true,
+        reconstruct: a.reconstruct, maxPoints: a.maxPoints, maxLevels: a.maxLevels, maxMemory: a.maxMemory });
+      levels = r.levels;
+      levels.header = r.header;
+      process.stderr.write(`hmc dec: ${a.in}: ${r.tiles.length} tiles, ${r.bytesRead} bytes read\n`);
+    } catch (e) {
+      if (!(e instanceof HmcError)) throw e;
+      process.stderr.write(`hmc: ${a.in}: ${e.message}\n`);
+      return e.code === 'io_error' ? 2 : e.code === 'invalid_argument' ? 1 : EXIT[e.code] || 3;
+    }
+  } else {
+    let bytes;
+    try {
+      bytes = readFileSync(a.in);
+    } catch (e) {
+      process.stderr.write(`hmc: cannot read ${a.in}: io_error: ${e.message}\n`);
+      return 2;
+    }
+    try {
+      levels = await decode(bytes, { reconstruct: a.reconstruct, maxPoints: a.maxPoints, maxLevels: a.maxLevels,
+        maxMemory: a.maxMemory });
+    } catch (e) {
+      if (!(e instanceof HmcError)) throw e;
+      process.stderr.write(`hmc: ${a.in}: ${e.message}\n`);
+      return EXIT[e.code] || 3;
+    }
   }
   if (levels.incomplete) process.stderr.write(`hmc: warning: ${a.in}: ${levels.message}\n`);
   const h = levels.header;

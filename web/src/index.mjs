@@ -336,6 +336,9 @@ export async function* decodeStream(source, options = {}) {
   }
 }
 
+// Tiled models (spec/tiles.md): the index, region queries, merging.
+export { readTileIndex, tilesInRegion, decodeTiled, openTiled, crc32 } from './tiles.mjs';
+
 /** The status name of a numeric hmc_status (as hmc_status_string()). */
 export async function statusName(status) {
   const M = await loadModule();
