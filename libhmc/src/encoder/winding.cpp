@@ -7,7 +7,6 @@
 #include <cstddef>
 #include <cstring>
 #include <numeric>
-#include <tuple>
 
 #include "delaunay/predicates.hpp"
 #include "util/error.hpp"
@@ -426,95 +425,6 @@ ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<
     std::vector<std::uint8_t> used(border.size(), 0);
     std::vector<std::uint32_t> walk;
     std::vector<std::array<std::uint32_t, 2>> arcs;
-    // A walk that two cuts around the box close: it splits at two vertices
-    // s and t into arcs whose vertices each lie beyond a face of the arc's
-    // set (one side per axis, as above), s and t beyond a face of each set.
-    // Each arc is closed by the chord between s and t and fanned from its
-    // own apex beyond the faces its vertices lie beyond; the two chords
-    // cancel. As for one cut, every triangle lies beyond one face: an arc
-    // edge's ends and the chord's are beyond a common face, and the apex
-    // is beyond it. A tile that is a slab across a torus' tube, cut
-    // obliquely at a third face, has such a border: its cuts on the slab's
-    // two sides, joined along the third.
-    std::vector<std::uint8_t> full;  // the sets of one face per axis
-    for (int code = 0; code < 8; ++code)
-      full.push_back(std::uint8_t((1u << (code & 1)) | (1u << (2 + (code >> 1 & 1))) | (1u << (4 + (code >> 2 & 1)))));
-    auto two_cuts = [&](const std::vector<std::uint32_t>& w) {
-      const std::size_t m = w.size();
-      for (std::size_t i1 = 0; i1 < full.size(); ++i1)
-        for (std::size_t i2 = i1 + 1; i2 < full.size(); ++i2) {
-          const std::uint8_t set1 = full[i1], set2 = full[i2];
-          // Per vertex: 1 beyond set1's faces only, 2 set2's only, 3 both.
-          auto label = [&](std::size_t j) { return ((side[w[j]] & set1) ? 1 : 0) | ((side[w[j]] & set2) ? 2 : 0); };
-          std::size_t j0 = m, ones = 0, twos = 0;
-          bool covered = true;
-          for (std::size_t j = 0; j < m && covered; ++j) {
-            const int l = label(j);
-            covered = l != 0;
-            ones += l == 1, twos += l == 2;
-            if (l == 1 && j0 == m) j0 = j;
-          }
-          if (!covered || ones == 0 || twos == 0) continue;
-          // From a 1, cyclically: the 1s, the 3s of gap A, the 2s, the 3s
-          // of gap B, back to the 1s; with more changes it does not split.
-          std::vector<std::size_t> gap_a, gap_b, run;
-          int prev = 1, changes = 0;
-          for (std::size_t k = 1; k <= m; ++k) {
-            const std::size_t j = (j0 + k) % m;
-            const int l = label(j);
-            if (l == 3) {
-              run.push_back(j);
-              continue;
-            }
-            if (l != prev) {
-              ++changes;
-              (prev == 1 ? gap_a : gap_b) = run;
-            }
-            run.clear();
-            prev = l;
-          }
-          const bool fits = changes == 2;
-          if (!fits || gap_a.empty() || gap_b.empty()) continue;
-          // s in gap A, t in gap B, beyond a common face of each set.
-          std::array<std::size_t, 64> in_b;
-          in_b.fill(m);
-          for (std::size_t j : gap_b) in_b[side[w[j]]] = j;
-          std::size_t s = m, t = m;
-          for (std::size_t j : gap_a)
-            for (int bits = 0; bits < 64 && t == m; ++bits) {
-              const int both = side[w[j]] & bits;
-              if (in_b[bits] != m && (both & set1) && (both & set2)) s = j, t = in_b[bits];
-            }
-          if (t == m) continue;
-          // The arc from s to t lies beyond set2's faces, from t to s beyond set1's.
-          for (const auto& [from, length, set] : {std::tuple{s, (t + m - s) % m, set2}, std::tuple{t, (s + m - t) % m, set1}}) {
-            Vec3 c, lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300}, mean{0, 0, 0};
-            std::uint8_t faces = 0;
-            for (std::size_t k = 0; k <= length; ++k) {
-              const std::uint32_t v = w[(from + k) % m];
-              faces = static_cast<std::uint8_t>(faces | (side[v] & set));
-              for (int a = 0; a < 3; ++a) {
-                const double x = points[verts[v]][a];
-                lo[a] = std::min(lo[a], x), hi[a] = std::max(hi[a], x), mean[a] += x / static_cast<double>(length + 1);
-              }
-            }
-            for (int a = 0; a < 3; ++a) {
-              const int bits = (faces >> (2 * a)) & 3;
-              c[a] = bits == 1 ? lo[a] : bits == 2 ? hi[a] : std::round(4 * mean[a]) / 4;
-            }
-            const auto p = static_cast<std::uint32_t>(cap_points_.size());
-            cap_points_.push_back(c);
-            for (std::size_t k = 0; k < length; ++k) {
-              caps_.push_back({p, w[(from + k + 1) % m], w[(from + k) % m]});
-              cap_outside_.push_back(1);
-            }
-            caps_.push_back({p, w[from], w[(from + length) % m]});  // the chord back
-            cap_outside_.push_back(1);
-          }
-          return true;
-        }
-      return false;
-    };
     for (std::uint32_t k = 0; k < border.size(); ++k) {
       if (used[k] || apex[find(local(border[k][0]))] != ~0u) continue;
       const std::uint32_t start = local(border[k][0]);
@@ -531,7 +441,6 @@ ClosedSurface::ClosedSurface(const std::vector<Vec3>& points, const std::vector<
       const auto m = static_cast<std::uint32_t>(walk.size());
       if (m < 3) continue;  // there and back: no border
       auto vertex = [&](std::uint32_t x) { return walk[x % m]; };
-      if (box && two_cuts(walk)) continue;
       // (last, middle, first): the walk's own direction reversed, as the fan's.
       caps_.push_back({vertex(2 * m / 3), vertex(m / 3), vertex(0)});
       cap_outside_.push_back(0);

@@ -73,10 +73,9 @@ double winding_number(const std::vector<Vec3>& points, const std::vector<Triangl
 /// triangle's normal: counting crossings from a point whose value is known
 /// gives the value anywhere, exactly, at the cost of a short walk down a
 /// box tree instead of a sum over the whole surface. An open surface is
-/// closed by caps: each connected part of its border (the edges used more
-/// often in one direction than in the other) is cut into closed walks, and
-/// each walk is closed by halving it (triangles of its vertices, as small
-/// as the arcs they span), so that the surface's winding number is the
+/// closed by caps: for each connected part of its border (the edges used
+/// more often in one direction than in the other), triangles from the
+/// border edges to one apex, so that the surface's winding number is the
 /// closed one's less the caps'.
 ///
 /// With a box (a tile's seal box, EncodeOptions::seal_box), a border part
@@ -86,10 +85,7 @@ double winding_number(const std::vector<Vec3>& points, const std::vector<Triangl
 /// too (at the part's extreme coordinate there), so that its cap stays
 /// outside the box (each cap triangle lies within an edge's length of a
 /// segment from the apex to a vertex beyond the same face), and
-/// cap_outside() marks its triangles. A closed walk of another part that
-/// two such cuts cover (it splits into two arcs, each beyond the faces of
-/// its own set, their ends beyond a face of each) gets two fans, each arc
-/// closed by the chord between the split vertices, also outside the box.
+/// cap_outside() marks its triangles.
 ///
 /// Coordinates are in quarter grid units (4 × grid units; tetrahedron
 /// centroids are then integers): the surface's points must be integers in
