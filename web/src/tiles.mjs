@@ -229,20 +229,38 @@ export async function decodeTiled(index, fetchPrefix, options = {}) {
 }
 
 /** A tiled model over HTTP: fetches `url` (its tiles.json, or the
- *  directory holding it) and resolves to `{ index, fetchPrefix }` for
- *  decodeTiled, which then asks each tile for its prefix with a range
- *  request (a server that ignores ranges sends the whole file, of which
- *  the prefix is kept). `fetchImpl` defaults to the global fetch. */
+ *  directory holding it) and resolves to `{ index, fetchPrefix, fetched }`
+ *  for decodeTiled. fetchPrefix asks for a tile's prefix with a range
+ *  request and keeps what it got, so that decoding a finer level next
+ *  fetches only the bytes after it (a server that ignores ranges sends the
+ *  whole file, which is then kept). `fetched()` is the bytes received so
+ *  far. `fetchImpl` defaults to the global fetch. */
 export async function openTiled(url, fetchImpl = globalThis.fetch) {
   const base = new URL(url, globalThis.location ? globalThis.location.href : undefined);
   const indexUrl = base.pathname.endsWith('.json') ? base : new URL('tiles.json', base.href.endsWith('/') ? base : base.href + '/');
   const res = await fetchImpl(indexUrl.href);
   if (!res.ok) throw new HmcError('io_error', `${indexUrl.href}: HTTP ${res.status}`, 21);
   const index = readTileIndex(await res.text());
-  const fetchPrefix = async (file, bytes, whole) => {
-    const r = await fetchImpl(new URL(file, indexUrl).href, whole ? {} : { headers: { Range: `bytes=0-${bytes - 1}` } });
-    if (!r.ok) throw new HmcError('io_error', `${file}: HTTP ${r.status}`, 21);
-    return new Uint8Array(await r.arrayBuffer());
+  const kept = new Map();
+  let received = 0;
+  const fetchPrefix = async (file, bytes) => {
+    let have = kept.get(file) || new Uint8Array(0);
+    if (have.length < bytes) {
+      const r = await fetchImpl(new URL(file, indexUrl).href, { headers: { Range: `bytes=${have.length}-${bytes - 1}` } });
+      if (!r.ok) throw new HmcError('io_error', `${file}: HTTP ${r.status}`, 21);
+      const got = new Uint8Array(await r.arrayBuffer());
+      received += got.length;
+      if (r.status === 206) {
+        const joined = new Uint8Array(have.length + got.length);
+        joined.set(have);
+        joined.set(got, have.length);
+        have = joined;
+      } else {
+        have = got;  // the whole file
+      }
+      kept.set(file, have);
+    }
+    return have.length > bytes ? have.subarray(0, bytes) : have;
   };
-  return { index, fetchPrefix };
+  return { index, fetchPrefix, fetched: () => received };
 }

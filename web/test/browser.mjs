@@ -70,6 +70,33 @@ try {
     await r.page.close();
   }
 
+  // ---- a tiled model (spec/tiles.md): the surface cut into tiles, its
+  // merged levels streamed by range requests, against hmc dec's merged dump
+  {
+    const tiled = path.join(OUT_DIR, 'tiled');
+    fs.rmSync(tiled, { recursive: true, force: true });
+    const t = run(hmc, ['tile', path.join(OUT_DIR, cases[0].input), '-o', tiled, '--tile-points', '800', '--levels', '3',
+      '--engine', 'pool', '--json']);
+    check(t.code === 0, `tiled: hmc tile (${t.code}) ${t.code ? t.stderr : ''}`);
+    const dump = path.join(OUT_DIR, 'tiled.canonical');
+    fs.rmSync(dump, { recursive: true, force: true });
+    run(hmc, ['dec', tiled, '--canonical', dump]);
+    const lines = (f) => fs.readFileSync(path.join(dump, f), 'utf8').split('\n').filter(Boolean).length;
+    const want = [2, 1, 0].map((k) => ({ index: k, points: lines(`level-${k}.points`), triangles: lines(`level-${k}.simplices`),
+      tetrahedra: 0, stream_bytes: '-' }));
+    const r = await openViewer(browser, base, null, `&tiles=${encodeURIComponent('../test/out/tiled/')}`);
+    check(!r.timedOut && r.state && !r.state.error, `tiled: viewer finished without error (${JSON.stringify(r.state && r.state.error)})`);
+    compareLevels('tiled', r.state ? r.state.levels : [], want);
+    const total = JSON.parse(fs.readFileSync(path.join(tiled, 'tiles.json'), 'utf8')).tiles.reduce((n, x) => n + x.bytes, 0);
+    check(r.state && r.state.drawn === 0 && r.state.received === total,
+      `tiled: level 0 drawn, ${r.state && r.state.received} bytes fetched, the tiles' ${total}`);
+    const px = await r.page.evaluate(() => window.hmcViewerPixelStats());
+    check(px.nonBackground > 0.01 * px.width * px.height, `tiled: ${px.nonBackground} pixels are not background`);
+    await r.page.screenshot({ path: path.join(OUT_DIR, 'tiled.png') });
+    check(r.pageErrors.length === 0, `tiled: no page errors ${r.pageErrors.join(' | ')}`);
+    await r.page.close();
+  }
+
   // ---- hostile streams, on the surface
   const s = cases[0], bytes = fs.readFileSync(path.join(OUT_DIR, s.file));
   const lv = s.ref.levels; // coarsest first; stream_bytes = end of that level's chunks

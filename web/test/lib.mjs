@@ -170,7 +170,8 @@ export async function openViewer(browser, base, src, query = '', timeoutMs = 180
   const pageErrors = [];
   page.on('pageerror', (e) => pageErrors.push(String(e)));
   page.on('console', (m) => { if (m.type() === 'error') pageErrors.push('console: ' + m.text()); });
-  await page.goto(`${base}/viewer/index.html?src=${encodeURIComponent(src)}${query}`);
+  // src null: the query says what to open (e.g. '&tiles=...').
+  await page.goto(`${base}/viewer/index.html?${src === null ? '' : `src=${encodeURIComponent(src)}`}${query}`);
   const t0 = Date.now();
   let worstPing = 0;
   for (;;) {

@@ -103,7 +103,7 @@ const server = http.createServer((req, res) => {
 });
 await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
 try {
-  const { index: remote, fetchPrefix } = await openTiled(`http://127.0.0.1:${server.address().port}/`);
+  const { index: remote, fetchPrefix, fetched } = await openTiled(`http://127.0.0.1:${server.address().port}/`);
   const region = corner.split(',').map(Number);
   const r = await decodeTiled(remote, fetchPrefix, { level: 2, region });
   const wanted = r.tiles.reduce((s, t) => s + remote.tiles[t].level_bytes[2], 0);
@@ -115,6 +115,15 @@ try {
   const nat = fs.readFileSync(path.join(dir, 'native-corner-at-level-2', 'level-2.points'), 'utf8').trim().split('\n');
   check(r.levels.length === 1 && r.levels[0].pointCount === nat.length && r.levels[0].triangles.length > 0,
     `its level 2: ${r.levels[0].pointCount} points, ${r.levels[0].triangles.length / 3} triangles, as hmc dec's`);
+  // Then level 0 of the same corner: only the bytes after level 2's prefix.
+  const f = await decodeTiled(remote, fetchPrefix, { level: 0, region });
+  const more = requests.filter((q) => q.range).slice(ranged.length);
+  const whole = f.tiles.reduce((s, t) => s + remote.tiles[t].bytes, 0);
+  check(more.length === f.tiles.length && more.every((q, i) => q.range === `bytes=${remote.tiles[f.tiles[i]].level_bytes[2]}-${remote.tiles[f.tiles[i]].bytes - 1}`),
+    `level 0 next: one range request per tile for the rest (${more.map((q) => q.range).join(', ')})`);
+  check(fetched() === whole, `${fetched()} bytes fetched in all, the tiles' ${whole}`);
+  const nat0 = fs.readFileSync(path.join(dir, 'native-corner-at-level-0', 'level-0.points'), 'utf8').trim().split('\n');
+  check(f.levels[0].pointCount === nat0.length, `its level 0: ${f.levels[0].pointCount} points, as hmc dec's`);
 } finally {
   server.close();
 }

@@ -334,3 +334,9 @@ window.hmcViewerShow = (index, clip) => {
 
 resize();
 if (params.get('src')) start({ src: params.get('src') });
+// A tiled model: ?tiles=DIR/ (or its tiles.json), optionally
+// &region=xmin,ymin,zmin,xmax,ymax,zmax in model coordinates.
+else if (params.get('tiles')) {
+  const region = params.get('region') ? params.get('region').split(',').map(Number) : null;
+  start({ tiles: params.get('tiles'), region: region && region.length === 6 && region.every(Number.isFinite) ? region : null });
+}

@@ -86,9 +86,44 @@ function errorInfo(e) {
   return { code: String(code), message: String((e && e.message) || e) };
 }
 
+// A tiled model (spec/tiles.md): its levels coarsest first, each the merged
+// level of the tiles the region needs (all without one), fetched by range
+// requests; a finer level fetches only the bytes after the coarser one's.
+async function runTiled({ tiles, region, limits, moduleUrl }, post, t0) {
+  const mod = await loadModule(moduleUrl);
+  const { index, fetchPrefix, fetched } = await mod.openTiled(new URL(tiles, self.location.href).href);
+  const which = region ? mod.tilesInRegion(index, region) : index.tiles.map((_, i) => i);
+  const total = which.reduce((s, i) => s + index.tiles[i].bytes, 0);
+  post({ type: 'progress', received: 0, total });
+  let levelCount = 0;
+  for (let lod = index.levels - 1; lod >= 0; --lod) {
+    const r = await mod.decodeTiled(index, fetchPrefix, { ...limits, level: lod, region });
+    const l = normaliseLevel({ ...r.levels[0], kind: index.kind, bytes: fetched() }, fetched());
+    l.seconds = (performance.now() - t0) / 1000;
+    l.tiles = r.tiles.length;
+    levelCount++;
+    const tr = [l.positions.buffer];
+    if (l.triangles) tr.push(l.triangles.buffer);
+    if (l.tetrahedra) tr.push(l.tetrahedra.buffer);
+    post({ type: 'level', level: l }, tr);
+    post({ type: 'progress', received: fetched(), total });
+  }
+  return { received: fetched(), levelCount };
+}
+
 self.onmessage = async (ev) => {
   const { src, file, limits, moduleUrl } = ev.data;
   const t0 = performance.now();
+  if (ev.data.tiles) {
+    const post = (m, tr) => self.postMessage(m, tr || []);
+    try {
+      const { received, levelCount } = await runTiled(ev.data, post, t0);
+      post({ type: 'done', seconds: (performance.now() - t0) / 1000, received, levelCount });
+    } catch (e) {
+      post({ type: 'error', error: errorInfo(e), seconds: (performance.now() - t0) / 1000, received: 0, levelCount: 0 });
+    }
+    return;
+  }
   let received = 0, total = 0, levelCount = 0;
   const post = (m, tr) => self.postMessage(m, tr || []);
   let dec = null;
