@@ -73,15 +73,16 @@ double winding_number(const std::vector<Vec3>& points, const std::vector<Triangl
 /// triangle's normal: counting crossings from a point whose value is known
 /// gives the value anywhere, exactly, at the cost of a short walk down a
 /// box tree instead of a sum over the whole surface. An open surface is
-/// closed by caps: for each connected part of its border (the edges used
-/// more often in one direction than in the other), triangles from the
-/// border edges to one apex, so that the surface's winding number is the
-/// closed one's less the caps'.
+/// closed by caps: each connected part of its border (the edges used more
+/// often in one direction than in the other) is cut into closed walks, each
+/// closed by halving it (triangles of its own vertices, as small as the arcs
+/// they span), so that the surface's winding number is the closed one's
+/// less the caps'.
 ///
 /// With a box (a tile's seal box, EncodeOptions::seal_box), a border part
 /// whose every vertex lies beyond some face of the box by more than the
 /// part's longest edge (per axis), all of them beyond faces of at most one
-/// side per axis, is a cut around the box: its apex goes beyond those faces
+/// side per axis, is a cut around the box, closed instead by a fan from one apex beyond those faces
 /// too (at the part's extreme coordinate there), so that its cap stays
 /// outside the box (each cap triangle lies within an edge's length of a
 /// segment from the apex to a vertex beyond the same face), and
