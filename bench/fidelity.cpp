@@ -4,14 +4,12 @@
 // connectivity with the input's own. Prints one JSON object.
 //
 // usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact]
-//                       [--levels L] [--vq-bits B] [--vq-residual S] [--per-level] [--fit-coarse]
+//                       [--levels L] [--per-level] [--fit-coarse]
 //                       [--preview-ratio R]
 //
-// With --levels or --vq-bits (issue 7, lossy streams) the model goes through
-// the public encoder and decoder instead, with L levels (2 by default) and
-// the refinement layers coded by the anchored vector quantizer with 2^B
-// entries (B = 0: exact). Lossy points are not the input's, so the report
-// compares geometry and topology, not vertex identity: see stream_report().
+// With --levels the model goes through the public encoder and decoder
+// instead, with L levels, and the report compares geometry and topology, not
+// vertex identity: see stream_report().
 // --per-level adds every decoded level's Hausdorff distance to the input
 // surface (a volume's boundary), its topology and its side bytes;
 // --fit-coarse encodes with EncodeOptions::fit_coarse_levels, --preview-ratio R with
@@ -131,10 +129,10 @@ std::vector<Vec3> to_vec3(const std::vector<GridPoint>& g) {
   return out;
 }
 
-// End-to-end report on a (possibly lossy) stream: encode with the public
-// API, decode the bytes, and compare the decoder's finest level with the
-// input on the grid. A lossy point is not an input point, so nothing is
-// matched by identity; instead:
+// End-to-end report on a stream: encode with the public API, decode the
+// bytes, and compare the decoder's finest level with the input on the grid.
+// Nothing is matched by identity (a report written for streams whose points
+// need not be the input's); instead:
 //  - point error: each input grid point to its nearest decoded point and
 //    back (max and RMS, % of the input's box diagonal);
 //  - surface Hausdorff between the rebuilt surface (a volume's boundary)
@@ -146,16 +144,13 @@ std::vector<Vec3> to_vec3(const std::vector<GridPoint>& g) {
 //    with exact layers this is the plain reproduced share (of all input
 //    simplices, not of the Delaunay ceiling);
 //  - whether the decoder rebuilt exactly what the encoder predicted.
-int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int levels, int vq_bits,
-                  std::uint32_t vq_residual, bool per_level, bool fit_coarse, double preview) {
+int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int levels, bool per_level, bool fit_coarse, double preview) {
   EncodeOptions opt;
   opt.fit_coarse_levels = fit_coarse;
   opt.preview_ratio = preview;
   opt.bits = q;
   opt.fidelity = fidelity;
   opt.levels = levels;
-  opt.vq_bits = vq_bits;
-  opt.vq_residual = vq_residual;
   opt.write_info = false;
   const auto t0 = std::chrono::steady_clock::now();
   auto enc = encode(m, opt);
@@ -230,18 +225,14 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
   const double pt_haus = std::sqrt(std::max(in_out_max, out_in_max));
   const double pt_rms = std::sqrt(std::max(in_out_sum / double(in_i.size()), out_in_sum / double(std::max<std::size_t>(out_i.size(), 1))));
 
-  std::uint64_t lossy_points = 0, dropped = 0;
-  for (const auto& l : e.report.levels)
-    if (l.coder == 1) lossy_points += l.new_points, dropped += l.dropped_points;
   std::printf("{\"model\": \"%s\", \"mode\": \"stream\", \"kind\": \"%s\", \"fidelity\": \"%s\", \"q\": %d, "
-              "\"levels\": %zu, \"vq_bits\": %d, \"vq_residual\": %u, \"codebook\": %llu, \"bytes\": %zu, "
+              "\"levels\": %zu, \"bytes\": %zu, "
               "\"input_vertices\": %zu, \"bits_per_input_vertex\": %.3f, \"points_in\": %zu, \"points_out\": %zu, "
-              "\"lossy_points\": %llu, \"dropped_points\": %llu, \"points_moved\": %zu, \"decoder_matches_encoder\": %s, ",
+              "\"points_moved\": %zu, \"decoder_matches_encoder\": %s, ",
               path, kind_name(kind), fidelity_name(fidelity),
-              q, dec.value().levels.size(), vq_bits, vq_residual,
-              static_cast<unsigned long long>(e.report.codebook_size), e.bytes.size(), m.points.size(),
+              q, dec.value().levels.size(), e.bytes.size(), m.points.size(),
               8.0 * double(e.bytes.size()) / double(m.points.size()), in_pts.size(), fin.points.size(),
-              static_cast<unsigned long long>(lossy_points), static_cast<unsigned long long>(dropped), moved,
+              moved,
               same ? "true" : "false");
   std::printf("\"point_hausdorff_pct_diag\": %.4f, \"point_rms_pct_diag\": %.5f, ", 100 * pt_haus / diag,
               100 * pt_rms / diag);
@@ -333,20 +324,17 @@ int stream_report(const char* path, const Mesh& m, int q, Fidelity fidelity, int
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact] [--levels L] [--vq-bits B] "
-                         "[--vq-residual S] [--per-level] [--fit-coarse] [--preview-ratio R]\n");
+    std::fprintf(stderr, "usage: fidelity MODEL [--bits Q] [--fidelity rule|topology|shape|exact] [--levels L] "
+                         "[--per-level] [--fit-coarse] [--preview-ratio R]\n");
     return 1;
   }
-  int q = 12, levels = 0, vq_bits = -1;
-  long vq_residual = 0;
+  int q = 12, levels = 0;
   bool per_level = false, fit_coarse = false;
   double preview = 0;
   Fidelity fidelity = Fidelity::shape;
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--bits") && i + 1 < argc) q = std::atoi(argv[++i]);
     if (!std::strcmp(argv[i], "--levels") && i + 1 < argc) levels = std::atoi(argv[++i]);
-    if (!std::strcmp(argv[i], "--vq-bits") && i + 1 < argc) vq_bits = std::atoi(argv[++i]);
-    if (!std::strcmp(argv[i], "--vq-residual") && i + 1 < argc) vq_residual = std::atol(argv[++i]);
     if (!std::strcmp(argv[i], "--per-level")) per_level = true;
     if (!std::strcmp(argv[i], "--fit-coarse")) fit_coarse = true;
     if (!std::strcmp(argv[i], "--preview-ratio") && i + 1 < argc) preview = std::atof(argv[++i]);
@@ -361,9 +349,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const Mesh& m = mesh.value();
-  if (levels > 0 || vq_bits >= 0)
-    return stream_report(argv[1], m, q, fidelity, levels > 0 ? levels : 2, std::max(vq_bits, 0),
-                         static_cast<std::uint32_t>(std::max(vq_residual, 0L)), per_level, fit_coarse, preview);
+  if (levels > 0) return stream_report(argv[1], m, q, fidelity, levels, per_level, fit_coarse, preview);
   const Kind kind = m.tetrahedra.empty() ? Kind::surface : Kind::volume;
   const auto sq = fit_quantizer(m.points, q);
   const auto g = quantize(m.points, sq);

@@ -4,129 +4,13 @@
 decoded at its finest level, compared with the input's own connectivity, at
 each encoder fidelity setting. Writes bench/results/fidelity.md.
 
-With --lossy (issue 7), each chosen model goes through the encoder and the
-decoder instead, with --levels levels and the refinement layers coded by the
-anchored vector quantizer at each --vq-bits B (0: exact, the baseline), and
-the decoder's finest level is compared geometrically with the input (see
-bench/fidelity.cpp, stream_report). Writes bench/results/fidelity-lossy.md.
-
-usage: bench/fidelity_report.py [--fidelity-bin build/bench/fidelity] [--data ../shared/data]
-       bench/fidelity_report.py --lossy [--vq-bits 0,4,8] [--levels 2] [--models bunny,spot]"""
+usage: bench/fidelity_report.py [--fidelity-bin build/bench/fidelity] [--data ../shared/data]"""
 import argparse
 import json
 import os
 import subprocess
 import sys
 import time
-
-
-def lossy_report(a, models, out_path):
-    rows = []
-    for m in models:
-        for b in [int(x) for x in a.vq_bits.split(",")]:
-            cmd = [a.fidelity_bin, m, "--levels", str(a.levels), "--vq-bits", str(b)]
-            r = subprocess.run(cmd, capture_output=True, text=True)
-            name = os.path.splitext(os.path.basename(m))[0]
-            if r.returncode != 0:
-                rows.append({"name": name, "vq_bits": b, "error": r.stderr.strip()})
-                print(name, b, "failed:", r.stderr.strip(), file=sys.stderr)
-                continue
-            row = json.loads(r.stdout)
-            row["name"] = name
-            rows.append(row)
-            print(name, b, file=sys.stderr)
-
-    def head(r):
-        lossy = f"{r['lossy_points']:,}" + (f" ({r['dropped_points']} dropped)" if r["dropped_points"] else "")
-        return (f"| {r['name']} | {r['vq_bits'] or 'exact'} | {r['bits_per_input_vertex']:.2f} | {lossy} | "
-                f"{r['point_hausdorff_pct_diag']:.3f} / {r['point_rms_pct_diag']:.4f} | "
-                f"{'yes' if r['decoder_matches_encoder'] else '**no**'} | {r['matched_pct']:.1f} | ")
-
-    L = ["# Reconstruction fidelity of lossy streams (issue 7)", ""]
-    L.append(f"Produced by `bench/fidelity_report.py --lossy --vq-bits {a.vq_bits} --levels {a.levels}"
-             f"{' --models ' + a.models if a.models else ''}` on {time.strftime('%Y-%m-%d')}: q = 12, fidelity `shape`, "
-             f"{a.levels} levels, the refinement layer coded by the anchored vector quantizer with 2^B entries "
-             "(`hmc enc --levels L --vq-bits B`; *exact* is B = 0, the same levels with coder 0). Each model goes "
-             "through the public encoder and decoder (`bench/fidelity --levels L --vq-bits B`), and the decoder's "
-             "finest level, rebuilt from the decoded points, is compared with the input's own connectivity on the "
-             "grid. Lossy points are not input points, so nothing is matched by identity:")
-    L.append("")
-    L.append("- *point error*: symmetric Hausdorff / RMS distance between the input's grid points and the decoded "
-             "ones (nearest points), % of the box diagonal;")
-    L.append("- *dec = enc*: the decoder rebuilt exactly the points and simplices the encoder predicted;")
-    L.append("- *matched*: share of the input's triangles (tetrahedra) whose vertices' nearest decoded points are "
-             "distinct and form an output triangle (tetrahedron); for an exact stream this is the plain reproduced "
-             "share of all input simplices (not of the Delaunay ceiling, as in `fidelity.md`);")
-    L.append("- *Hausdorff*: between the rebuilt surface (a volume's boundary) and the input's, sampled at vertices, "
-             "edge midpoints and centroids, out→in / in→out, % of the diagonal; then the rebuilt surface's topology "
-             "beside the input's.")
-    L.append("")
-    L.append("Bits per vertex: whole stream (with `RCON`, no `info` chunk) over the input file's vertex count.")
-    L.append("")
-    L.append("## Surfaces")
-    L.append("")
-    L.append("| model | B | bits/vertex | lossy points | point error Hausdorff / RMS % | dec = enc | matched % | "
-             "triangles in/out | Hausdorff % out→in / in→out | border e. in/out | non-manifold e. | components in/out | Euler in/out |")
-    L.append("|---|---|---:|---:|---|---|---:|---|---|---|---|---|---|")
-    for r in rows:
-        if "error" in r or r["kind"] != "surface":
-            continue
-        i, o = r["input_topology"], r["output_topology"]
-        L.append(head(r) + f"{r['input_triangles']:,}/{r['output_triangles']:,} | "
-                 f"{r['hausdorff_out_to_in_pct']:.3f} / {r['hausdorff_in_to_out_pct']:.3f} | "
-                 f"{i['border_edges']}/{o['border_edges']} | {o['nonmanifold_edges']} | "
-                 f"{i['components']}/{o['components']} | {i['euler']}/{o['euler']} |")
-    L.append("")
-    L.append("## Volumes")
-    L.append("")
-    L.append("| model | B | bits/vertex | lossy points | point error Hausdorff / RMS % | dec = enc | matched % | "
-             "tets in/out | volume ratio | boundary Hausdorff % out→in / in→out | boundary non-manifold e. | "
-             "components in/out | Euler in/out |")
-    L.append("|---|---|---:|---:|---|---|---:|---|---|---|---|---|---|")
-    for r in rows:
-        if "error" in r or r["kind"] != "volume":
-            continue
-        i, o = r["input_boundary_topology"], r["output_boundary_topology"]
-        L.append(head(r) + f"{r['input_tets']:,}/{r['output_tets']:,} | {r['volume_ratio']:.4f} | "
-                 f"{r['boundary_hausdorff_out_to_in_pct']:.3f} / {r['boundary_hausdorff_in_to_out_pct']:.3f} | "
-                 f"{o['nonmanifold_edges']} | {i['components']}/{o['components']} | {i['euler']}/{o['euler']} |")
-    L.append("")
-    # What changed against the exact stream of the same model and levels.
-    base = {r["name"]: r for r in rows if "error" not in r and r["vq_bits"] == 0}
-    notes = []
-    for r in rows:
-        if "error" in r or r["vq_bits"] == 0 or r["name"] not in base:
-            continue
-        b = base[r["name"]]
-        key = "output_topology" if r["kind"] == "surface" else "output_boundary_topology"
-        h = "hausdorff_pct_diag" if r["kind"] == "surface" else "boundary_hausdorff_pct_diag"
-        changed = [k for k in ("components", "euler", "border_edges", "nonmanifold_edges") if r[key][k] != b[key][k]]
-        notes.append(f"- {r['name']} B = {r['vq_bits']}: Hausdorff {r[h]:.2f} % of the diagonal against {b[h]:.2f} % "
-                     f"exact, {r[h] / max(r['point_hausdorff_pct_diag'], 1e-9):.1f} × the largest point error; "
-                     + (("topology differs from the exact stream's (" + ", ".join(
-                         f"{k} {b[key][k]} → {r[key][k]}" for k in changed) + ")") if changed else "same topology"))
-    if notes:
-        L.append("Lossy against exact (the B = 0 row of the same model):")
-        L.append("")
-        L.extend(n + "." for n in notes)
-        L.append("")
-    with_tris = sorted({r["name"] for r in rows if r.get("input_file_triangles")})
-    if with_tris:
-        L.append(f"{', '.join(with_tris)}: the file also carries triangles besides its tetrahedra, and the encoder "
-                 "tunes the reconstruction to those triangles rather than to the tetrahedra's boundary, which is "
-                 "what is measured here (also with exact layers: see the exact row).")
-        L.append("")
-    failed = [r for r in rows if "error" in r]
-    if failed:
-        L.append("Failed runs: " + "; ".join(f"{r['name']} B = {r['vq_bits']}: `{r['error']}`" for r in failed) + ".")
-        L.append("")
-    os.makedirs(os.path.dirname(out_path), exist_ok=True)
-    with open(out_path, "w") as f:
-        f.write("\n".join(L) + "\n")
-    with open(os.path.splitext(out_path)[0] + ".jsonl", "w") as f:
-        for r in rows:
-            f.write(json.dumps(r) + "\n")
-    print("\n".join(L))
 
 
 def surface_verdict(r):
@@ -247,11 +131,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--fidelity-bin", default=os.path.join(root, "build", "bench", "fidelity"))
     ap.add_argument("--data", default=os.path.join(root, "..", "shared", "data"))
-    ap.add_argument("--out", default=None, help="default bench/results/fidelity.md (fidelity-lossy.md with --lossy)")
+    ap.add_argument("--out", default=None, help="default bench/results/fidelity.md")
     ap.add_argument("--modes", default="rule,topology,shape,exact")
-    ap.add_argument("--lossy", action="store_true", help="end-to-end report on lossy streams (issue 7)")
-    ap.add_argument("--vq-bits", default="0,4,8", help="with --lossy: codebook sizes 2^B to run (0: exact)")
-    ap.add_argument("--levels", type=int, default=2, help="with --lossy: levels of detail")
     ap.add_argument("--models", default="", help="comma-separated substrings of model names")
     ap.add_argument("--replot", action="store_true", help="rewrite the report from its .jsonl without running")
     a = ap.parse_args()
@@ -262,8 +143,6 @@ def main():
             if os.path.splitext(f)[1] in (".obj", ".ply", ".off", ".mesh", ".node"):
                 if not a.models or any(w in f for w in a.models.split(",")):
                     models.append(os.path.join(d, f))
-    if a.lossy:
-        return lossy_report(a, models, a.out or os.path.join(here, "results", "fidelity-lossy.md"))
     a.out = a.out or os.path.join(here, "results", "fidelity.md")
     rows = []
     if a.replot:

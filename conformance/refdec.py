@@ -3,7 +3,7 @@
 """refdec: a second, independent HMC decoder, written from spec/hmc.md alone.
 
 It decodes the points of every level (every base and refinement coder) and parses
-and validates all side information (HEAD, SQNT, VQTB, BASE, REFN, RCON);
+and validates all side information (HEAD, SQNT, BASE, REFN, RCON);
 for kinds surface and volume it also rebuilds every level's triangles or
 tetrahedra (section 11, in refrecon.py, on the canonical Delaunay of
 refdelaunay.py, both written from spec/hmc.md and spec/delaunay.md alone):
@@ -87,10 +87,6 @@ class ByteReader:
                     self.fail("varint not in shortest form")
                 return value
         self.fail("varint longer than 10 bytes")
-
-    def svarint(self):
-        u = self.varint()
-        return (u >> 1) ^ -(u & 1)
 
     def end(self):
         if self.left():
@@ -584,13 +580,10 @@ def child_order(node, d, q, m, coarse, nb, neighbours, want_split=False, gap=0, 
     return (pi, min(above, below)) if want_split else pi
 
 
-def decode_refn(payload, q, coarse, n, codebook=None, form=1):
-    """Returns the added points A (list). coarse: C in canonical order;
-    codebook: the VQTB entries, or None when the stream has no VQTB."""
+def decode_refn(payload, q, coarse, n, form=1):
+    """Returns the added points A (list). coarse: C in canonical order."""
     if not payload:
         raise DecodeError("bad_layer", "REFN: empty payload")
-    if payload[0] == 1:
-        return decode_vq(payload, q, coarse, n, codebook, form)
     if payload[0] not in (0, 7):  # §8A.1: the short header (0) and the full one (7)
         raise DecodeError("bad_layer", "REFN: unknown coder %d" % payload[0])
     full = payload[0] == 7
@@ -661,54 +654,6 @@ def decode_refn(payload, q, coarse, n, codebook=None, form=1):
     br.finish()
     if len(points) != n:
         raise DecodeError("bad_layer", "REFN: %d added points, the header declares %d" % (len(points), n))
-    return points
-
-
-# ---------------------------------------------------------------- §8A.2 anchored vector quantizer
-
-
-def decode_vq(payload, q, coarse, n, codebook, form=1):
-    """§8A.2: coder 1. Returns the added points A."""
-    if codebook is None:
-        raise DecodeError("bad_layer", "REFN: coder 1 needs a VQTB chunk, and the stream has none")
-    br = BitReader(payload, 1, "bad_layer", "REFN")
-    s = br.ue()
-    if s > 2**21 - 1:
-        raise DecodeError("bad_layer", "REFN: residual step %d above 2^21 - 1" % s)
-    anchor_table = read_code(br, 64, form)
-    index_table = read_code(br, len(codebook), form)
-    residual_tables = [read_code(br, 64, form) for _ in range(3)] if s > 0 else None
-
-    def escaped(t):
-        e = t.decode(br, "bad_layer")
-        return 63 + br.ue() if e == 63 else e
-
-    def signed(e):
-        return e // 2 if e % 2 == 0 else -(e + 1) // 2
-
-    top = (1 << q) - 1
-    points = []
-    anchor = 0
-    for j in range(n):
-        anchor += escaped(anchor_table)
-        if anchor >= len(coarse):
-            raise DecodeError("bad_layer", "REFN: anchor %d of point %d beyond the %d coarse points" % (anchor, j, len(coarse)))
-        V = codebook[index_table.decode(br, "bad_layer")]
-        c = coarse[anchor]
-        p = []
-        for a in range(3):
-            v = c[a] + V[a]
-            if s > 0:
-                v += s * signed(escaped(residual_tables[a]))
-            p.append(min(max(v, 0), top))
-        points.append(tuple(p))
-    br.finish()
-    if len(set(points)) != len(points):
-        raise DecodeError("bad_layer", "REFN: two added points coincide")
-    cs = set(coarse)
-    for p in points:
-        if p in cs:
-            raise DecodeError("bad_layer", "REFN: added point %s is a coarser level's point" % (p,))
     return points
 
 
@@ -966,7 +911,7 @@ def decode(data):
             st.update(kind=kind, declared=pts, L=L, tables=flags & 1)
         elif t == "SQNT":
             need("SQNT" not in seen, "second SQNT")
-            need("BASE" not in seen and "VQTB" not in seen, "SQNT after VQTB or BASE")
+            need("BASE" not in seen, "SQNT after BASE")
             r = ByteReader(payload, "bad_header", "SQNT")
             if len(payload) != 33:
                 r.fail("payload of %d bytes, not 33" % len(payload))
@@ -982,26 +927,6 @@ def decode(data):
             if st["declared"][-1] > 1 << (3 * q):
                 r.fail("%d points do not fit a grid of 2^%d points" % (st["declared"][-1], 3 * q))
             st.update(q=q, origin=origin, step=step)
-        elif t == "VQTB":
-            need("SQNT" in seen, "VQTB before SQNT")
-            need("VQTB" not in seen, "second VQTB")
-            need("BASE" not in seen, "VQTB after BASE")
-            r = ByteReader(payload, "bad_header", "VQTB")
-            if r.u8() != 3:
-                r.fail("dimension not 3")
-            K = r.varint()
-            if not 1 <= K <= 65536:
-                r.fail("size %d out of range" % K)
-            if 3 * K > r.left():
-                r.fail("%d entries cannot fit in %d bytes" % (K, r.left()))
-            entries = []
-            for _ in range(3 * K):
-                v = r.svarint()
-                if abs(v) > 2**21 - 1:
-                    r.fail("entry %d out of range" % v)
-                entries.append(v)
-            r.end()
-            st["codebook"] = [tuple(entries[i:i + 3]) for i in range(0, 3 * K, 3)]
         elif t == "BASE":
             need("SQNT" in seen, "BASE before SQNT")
             need("BASE" not in seen, "second BASE")
@@ -1014,7 +939,7 @@ def decode(data):
             need("BASE" in seen, "REFN before BASE")
             need(layers < st["L"], "more layer chunks than the %d declared levels" % st["L"])
             n = st["declared"][layers] - st["declared"][layers - 1]
-            added = decode_refn(payload, st["q"], current, n, st.get("codebook"), st["tables"])
+            added = decode_refn(payload, st["q"], current, n, st["tables"])
             current = sorted(current + added)
             layers += 1
             pending_rcon = st["kind"] != 0

@@ -6,7 +6,7 @@
 # to ~2,000 points encoded by `hmc enc` at q = 1, 2, 12 and 21, with and
 # without the info chunk. The other targets' seeds are cut from those
 # streams, and hand-made edge cases are added (empty and cut streams, bad
-# CRC, unknown and out-of-order chunks, VQTB, single-symbol octree codes,
+# CRC, unknown and out-of-order chunks (VQTB among them), single-symbol octree codes,
 # NaN and halfway coordinates, ...). The mesh readers' seeds (meshio) are
 # the writers' output for a small torus and hand-made files in every format
 # the library reads. Deterministic: running it again gives the same files.
@@ -37,7 +37,7 @@ for spec in ball3:ball:3 ball40:ball:40 lattice64:lattice:64 sphere100:sphere:10
   done
 done
 
-# Small multi-level streams, exact and lossy, with their canonical dumps:
+# Small multi-level streams with their canonical dumps:
 # seeds for the layer and RCON targets (cut out below) and for decode.
 for spec in ball64:ball:64:volume sphere90:sphere:90:surface sphere50:sphere:50:surface ball36:ball:36:volume \
             sphere36:sphere:36:surface; do
@@ -46,15 +46,10 @@ for spec in ball64:ball:64:volume sphere90:sphere:90:surface sphere50:sphere:50:
   gen=${rest%%:*}
   rest=${rest#*:}
   "$HMC" gen "$gen" --vertices "${rest%%:*}" --seed 3 -o "$WORK/$name.ply" >/dev/null
-  for variant in exact:: vq3:--vq-bits=3 vq4r2:--vq-bits=4:--vq-residual=2; do
-    tag=${variant%%:*}
-    opts=$(echo "${variant#*:}" | tr ':=' '  ')
-    levels=2
-    case $name in *36) levels=1; [ "$tag" = exact ] || continue ;; esac
-    # shellcheck disable=SC2086
-    "$HMC" enc "$WORK/$name.ply" -o "$WORK/$name-$tag.hmc" --bits 8 --kind "${rest#*:}" --levels $levels --no-info \
-      --canonical "$WORK/$name-$tag.dump" $opts >/dev/null
-  done
+  levels=2
+  case $name in *36) levels=1 ;; esac
+  "$HMC" enc "$WORK/$name.ply" -o "$WORK/$name-exact.hmc" --bits 8 --kind "${rest#*:}" --levels $levels --no-info \
+    --canonical "$WORK/$name-exact.dump" >/dev/null
 done
 
 # Mesh files as the library writes them: seeds for the readers (meshio).
@@ -176,6 +171,7 @@ hand = {
     "base-coder-1": PRE + head(0, [1]) + sqnt(1) + chunk("BASE", b"\x01") + END,
     "sqnt-nan": PRE + head(0, [1]) + chunk("SQNT", bytes([1]) + struct.pack("<4d", float("nan"), 0, 0, 1)) + END,
     "sqnt-q22": PRE + head(0, [1]) + sqnt(22) + END,
+    # VQTB was removed in 0.27: an unknown critical chunk (bad_chunk)
     "vqtb": PRE + head(0, [1]) + sqnt(1) + chunk("VQTB", bytes([3]) + varint(2) +
             b"".join(svarint(v) for v in (1, -1, 0, 2097151, -2097151, 5)))
             + chunk("BASE", single_symbol_octree(1, [1])) + END,
@@ -211,7 +207,8 @@ for name, data in sorted(streams.items()):
     put("base_layer", name, base_input(q, n, parts["BASE"]))
     # The same stream declared one point short and one point long.
     if name.startswith("ball40"):
-        put("base_layer", name + "-n-1", base_input(q, n - 1, parts["BASE"]))
+        if n > 1:  # a base level of one point (the default's preview levels) has no shorter count
+            put("base_layer", name + "-n-1", base_input(q, n - 1, parts["BASE"]))
         put("base_layer", name + "-n+1", base_input(q, n + 1, parts["BASE"]))
 put("base_layer", "single-full-q3", base_input(3, 512, single_symbol_octree(3, [255] * 3)))
 put("base_layer", "single-chain-q21", base_input(21, 1, single_symbol_octree(21, [1] * 21)))
@@ -262,24 +259,13 @@ b = Bits(); b.put(0, 1); b.put(0b1111, 4); b.put(0, 1); b.ue(9); b.put(0b01, 2);
 b.put(0b1111, 4); b.put(1, 1); b.ue(10); b.put(0b1110, 4)
 put("huffman", "delta-far-end", huff_input(40, b.bytes(), 1))
 
-# --- refine_layer, vq_layer, recon: cut from the small streams -----------
+# --- refine_layer, recon: cut from the small streams ---------------------
 def dump_points(path):
     with open(path) as f:
         return [tuple(int(v) for v in line.split()) for line in f if line.strip()]
 
 def u24s(pts):
     return b"".join(b"".join((v & 0xFFFFFF).to_bytes(3, "little") for v in p) for p in pts)
-
-def svarints(data, pos):
-    value, shift = 0, 0
-    while True:
-        b = data[pos]
-        pos += 1
-        value |= (b & 0x7F) << shift
-        shift += 7
-        if b < 0x80:
-            break
-    return (value >> 1) ^ -(value & 1), value, pos
 
 for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
     name = os.path.basename(path)[:-4]
@@ -298,20 +284,8 @@ for path in sorted(glob.glob(os.path.join(work, "*-*.hmc"))):
         if len(coarse) > 64:
             continue
         common = bytes([q - 1, len(coarse) - 1]) + u24s(coarse)
-        if refn[0][0] in (0, 7):  # the target's coder byte mod 2: 0 coder 0, 1 coder 7
-            coder = bytes([{0: 0, 7: 1}[refn[0][0]]])
-            put("refine_layer", name, common + (n - 1).to_bytes(2, "little") + coder + refn[0][1:])
-        else:
-            vqtb = next(p for t, p in cs if t == "VQTB")
-            _, k, pos = svarints(vqtb, 1)  # the size is an unsigned varint: its raw value
-            entries = []
-            for _ in range(3 * k):
-                v, _, pos = svarints(vqtb, pos)
-                entries.append(v)
-            if k > 32:
-                continue
-            cb = b"".join((v & 0xFFFFFF).to_bytes(3, "little") for v in entries)
-            put("vq_layer", name, common + bytes([k - 1]) + cb + (n - 1).to_bytes(2, "little") + refn[0][1:])
+        coder = bytes([{0: 0, 7: 1}[refn[0][0]]])  # the target's coder byte mod 2: 0 coder 0, 1 coder 7
+        put("refine_layer", name, common + (n - 1).to_bytes(2, "little") + coder + refn[0][1:])
     if rcon and q == 8:
         pts = dump_points(os.path.join(dump, "level-0.points"))
         if 4 <= len(pts) <= 40:

@@ -360,7 +360,7 @@ TEST_CASE("analyze takes the encoder's options, and a stream gives the same rows
 
   // Usage errors: exit 1 with a message.
   for (const std::string bad : {"--optimizer sideways", "--optimizer forward,", "--boundary wavy", "--fidelity perfect",
-                                "--kind blob", "--ratio 0", "--ratio 1.5", "--levels 0", "--bits 22", "--vq-bits 4"}) {
+                                "--kind blob", "--ratio 0", "--ratio 1.5", "--levels 0", "--bits 22", "--fidelity"}) {
     CAPTURE(bad);
     const Run r = hmc_run(dir, "analyze " + q(ball) + " " + bad + " --json");
     CHECK(r.code == 1);

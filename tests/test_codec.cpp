@@ -472,24 +472,25 @@ TEST_CASE("hand-made malformed streams get their error class") {
     auto d = decode_ok(c.bytes());
     CHECK(d.finest().points == decode_ok(base.bytes()).finest().points);
   }
-  SUBCASE("vector-quantizer table: parsed and validated") {
-    VectorQuantizer vq;
-    vq.codebook = {{1, -2, 3}, {0, 0, 0}, {2097151, -2097151, 7}};
+  SUBCASE("removed in 0.27: a VQTB chunk and REFN coder 1") {
+    // VQTB (the vector quantizer's codebook) is no longer a known chunk: as
+    // any unknown critical chunk, it is bad_chunk wherever it stands.
+    const std::vector<std::uint8_t> vqtb{3, 1, 2, 3, 4};  // dimension 3, one entry: a valid 0.26 table
     Chunks c = base;
-    c.list.insert(c.list.begin() + static_cast<long>(index_of(c, kBaseLayer)), {kVectorQuantizer, write_vector_quantizer(vq)});
-    auto d = decode_ok(c.bytes());
-    REQUIRE(d.vector_quantizer.has_value());
-    CHECK(d.vector_quantizer->codebook == vq.codebook);
-    auto bad = vq;
-    bad.codebook[0][0] = 2097152;
-    c.list[index_of(c, kVectorQuantizer)].second = write_vector_quantizer(bad);
-    CHECK(decode_status(c.bytes()) == Status::bad_header);
-    ByteWriter w;
-    w.u8(3), w.varint(65536);
-    c.list[index_of(c, kVectorQuantizer)].second = w.data();  // declares more than it holds
-    CHECK(decode_status(c.bytes()) == Status::bad_header);
-    c.list[index_of(c, kVectorQuantizer)].second = {2, 1, 0, 0};
-    CHECK(decode_status(c.bytes()) == Status::bad_header);  // dimension 2
+    c.list.insert(c.list.begin() + static_cast<long>(index_of(c, kBaseLayer)), {chunk_type("VQTB"), vqtb});
+    CHECK(decode_status(c.bytes()) == Status::bad_chunk);
+    // A refinement layer of coder 1 is an unknown coder (bad_layer).
+    EncodeOptions two;
+    two.kind = Kind::points;
+    two.levels = 2;
+    const auto bytes = encode(samples::random_ball(300, 3), two).value().bytes;
+    const ContainerView v = parse_container(bytes.data(), bytes.size(), kEnd);
+    Chunks layered;
+    for (const auto& ch : v.chunks)
+      layered.list.emplace_back(ch.type, std::vector<std::uint8_t>(ch.payload, ch.payload + ch.length));
+    REQUIRE(decode_status(layered.bytes()) == Status::ok);
+    layered.list[index_of(layered, kRefinement)].second[0] = 1;
+    CHECK(decode_status(layered.bytes()) == Status::bad_layer);
   }
   SUBCASE("base layer: unknown coder, empty, extra bytes, short") {
     Chunks c = base;

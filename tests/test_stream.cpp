@@ -120,7 +120,6 @@ void check_same(const Outcome& a, const Outcome& b, bool messages = true) {
   CHECK(x.info == y.info);
   CHECK(x.truncated == y.truncated);
   CHECK(x.warning == y.warning);
-  CHECK(x.vector_quantizer.has_value() == y.vector_quantizer.has_value());
   REQUIRE(x.levels.size() == y.levels.size());
   for (std::size_t i = 0; i < x.levels.size(); ++i) {
     CAPTURE(i);

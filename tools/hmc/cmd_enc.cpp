@@ -51,14 +51,12 @@ int cmd_enc(int argc, char** argv) {
   opt.fit_coarse_levels = a.flag("--fit-coarse");
   opt.threads = threads_option(a);
   opt.levels = static_cast<int>(a.get_int("--levels", 1, 1, 64));
-  opt.vq_bits = static_cast<int>(a.get_int("--vq-bits", 0, 0, 10));
-  opt.vq_residual = static_cast<std::uint32_t>(a.get_int("--vq-residual", 0, 0, (1 << 21) - 1));
-  if (a.ok() && opt.vq_bits > 0 && opt.levels < 2) {
-    std::fprintf(stderr, "hmc enc: --vq-bits needs --levels 2 or more (the base level stays exact)\n");
-    return kUsage;
-  }
-  if (a.ok() && a.has("--vq-residual") && opt.vq_bits == 0) {
-    std::fprintf(stderr, "hmc enc: --vq-residual needs --vq-bits\n");
+  if (a.has("--vq-bits") || a.has("--vq-residual")) {
+    // Named so that a script written for spec 0.26 and earlier learns why.
+    std::fprintf(stderr,
+                 "hmc enc: --vq-bits and --vq-residual were removed with the lossy refinement coder (spec 0.27):\n"
+                 "         coding every point exactly at a smaller --bits reached a higher PSNR at the same rate\n"
+                 "         on every model measured (bench/results/rd.md)\n");
     return kUsage;
   }
   // The default stream is a preview that arrives first: with neither
@@ -139,7 +137,7 @@ int cmd_enc(int argc, char** argv) {
     std::fprintf(stderr,
                  "hmc enc: %s\n"
                  "usage: hmc enc IN -o OUT.hmc [--format F] [--bits Q] [--kind K] [--levels N] [--ratio R] [--preview-ratio R]\n"
-                 "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse] [--vq-bits B [--vq-residual S]]\n"
+                 "                  [--boundary M] [--optimizer O] [--fidelity F] [--fit-coarse]\n"
                  "                  [--fast-decode] [--lattice OX,OY,OZ,STEP] [--seal-box X0,Y0,Z0,X1,Y1,Z1]\n"
                  "                  [--tolerance-diagonal L]\n"
                  "                  [--canonical DIR] [--no-info] [--threads N] [--json]\n"
@@ -213,12 +211,10 @@ int cmd_enc(int argc, char** argv) {
       j.key("layers").begin_array();
       for (auto n : l.layer_sizes) j.value(n);
       j.end_array();
-      j.key("coder").value(l.coder).key("max_error").value(l.max_error).key("rms_error").value(l.rms_error);
-      j.key("dropped_points").value(l.dropped_points);
+      j.key("coder").value(l.coder);
       j.end_object();
     }
     j.end_array();
-    j.key("codebook_size").value(r.codebook_size);
     j.key("triangles").value(static_cast<std::uint64_t>(e.triangles.size()));
     j.key("tetrahedra").value(static_cast<std::uint64_t>(e.tetrahedra.size()));
     j.key("notes").begin_array();
@@ -237,13 +233,6 @@ int cmd_enc(int argc, char** argv) {
                   static_cast<unsigned long long>(l.new_points), static_cast<unsigned long long>(l.layer_bytes),
                   static_cast<unsigned long long>(l.side_bytes), static_cast<unsigned long long>(l.label_corrections),
                   8.0 * static_cast<double>(l.stream_bytes) / static_cast<double>(l.points));
-    if (r.codebook_size) {
-      std::printf("lossy refinement: codebook of %llu vectors (VQTB)\n", static_cast<unsigned long long>(r.codebook_size));
-      for (const auto& l : r.levels)
-        if (l.coder == 1)
-          std::printf("  level %d: error max %.3f, rms %.3f grid units; %llu point(s) dropped\n", l.lod, l.max_error,
-                      l.rms_error, static_cast<unsigned long long>(l.dropped_points));
-    }
     if (r.kind != Kind::points)
       std::printf("rebuilt by the decoder: %zu triangles, %zu tetrahedra\n", e.triangles.size(), e.tetrahedra.size());
     std::printf("%s: %llu bytes, %.3f bits per point (read %.3f s, encode %.3f s)\n", out.empty() ? "(no output)" : out.c_str(),

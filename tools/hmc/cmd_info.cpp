@@ -15,7 +15,6 @@ namespace {
 const char* refinement_coder_name(int coder) {
   switch (coder) {
     case 0: return "conditional octree";
-    case 1: return "anchored VQ (lossy)";
     case 7: return "conditional octree, full header";
     default: return "unknown";
   }

@@ -54,11 +54,6 @@ struct ScalarQuantizer {
   std::uint32_t cells() const noexcept { return std::uint32_t{1} << bits; }
 };
 
-/// The vector quantizer's codebook of displacement vectors, in grid units.
-struct VectorQuantizer {
-  std::vector<std::array<std::int32_t, 3>> codebook;
-};
-
 /// How much reconstruction side information the encoder sends.
 enum class Fidelity : std::uint8_t {
   rule = 0,   ///< only the rule's parameters: the decoder's own best guess
@@ -143,26 +138,12 @@ struct EncodeOptions {
   /// on coarser ones, whose vertices are farther from their neighbours' plane.
   BoundaryMode boundary_mode = BoundaryMode::linear;
   Optimizer optimizer = Optimizer::best;
-  /// Lossy refinement layers (spec "Refinement layer", coder 1): 0 keeps
-  /// every level exact; B in 1..10 codes each point a refinement layer adds
-  /// as a coarser point (its anchor) plus one of 2^B displacement vectors,
-  /// a codebook the encoder trains on the layers (LBG) and sends in a VQTB
-  /// chunk. The base layer (coarsest level) stays exact. Needs levels >= 2.
-  /// The encoder plans each level's reconstruction on the points the
-  /// decoder will have.
-  int vq_bits = 0;
-  /// With vq_bits: 0 sends the codeword alone; s >= 1 adds a scalar
-  /// residual with step s, so that every coordinate is within s/2 of the
-  /// input's (s = 1: exact; the encoder then keeps, per layer, whichever of
-  /// the two coders is smaller). At most 2^21 - 1.
-  std::uint32_t vq_residual = 0;
   /// Code the points for decoding speed: plain octrees (BASE coder 0, exact
   /// REFN layers without neighbours), which a decoder reads without
   /// a nearest-neighbour search per node. The stream is larger (the shared
   /// scanned surfaces' by about a fifth, a dense generated torus's by half:
   /// the ranked coders' prediction is off) and decoding the points is tens
-  /// of times faster; reconstruction is unchanged. Lossy layers (vq_bits,
-  /// REFN coder 1) search nothing anyway.
+  /// of times faster; reconstruction is unchanged.
   bool fast_decode = false;
   /// Called as the encoder advances: the level being planned (0 = finest)
   /// and the share of the work done, 0 to 1. It must not throw (it is
@@ -235,14 +216,8 @@ struct LevelReport {
   double mean_importance_retained = 0;         ///< mean IP (eq. 3.1) of the interior vertices kept
 
   /// Refinement coder of this level's layer (spec 8A): 0 conditional octree
-  /// with the short header, 7 with the full header (both exact), 1 anchored
-  /// vector quantizer (EncodeOptions::vq_bits); 0 for the base.
+  /// with the short header, 7 with the full header; 0 for the base.
   int coder = 0;
-  // Encoder only, coder 1: distances (grid units) of the decoded added
-  // points from the input's, and input points the layer could not place.
-  double max_error = 0;
-  double rms_error = 0;
-  std::uint64_t dropped_points = 0;
 };
 
 /// What the encoder did.
@@ -254,8 +229,6 @@ struct EncodeReport {
   std::uint64_t duplicates_merged = 0;  ///< input_points - distinct_points
   std::uint64_t total_bytes = 0;
   std::vector<LevelReport> levels;      ///< coarsest first
-  /// Entries of the vector quantizer's codebook (VQTB); 0 when none is sent.
-  std::uint64_t codebook_size = 0;
   /// What the caller may not expect of the stream, one sentence each: fewer
   /// levels than requested (and why), or a surface or volume whose points
   /// span no volume, for which the decoder rebuilds no connectivity. Empty
@@ -284,8 +257,7 @@ struct Encoded {
   std::vector<std::uint8_t> bytes;
   EncodeReport report;
   /// The finest level's points as the decoder will output them
-  /// (distinct quantized input points, ascending; with lossy refinement
-  /// layers, their decoded approximations).
+  /// (distinct quantized input points, ascending).
   std::vector<GridPoint> points;
   /// The finest level's connectivity as the decoder will rebuild it
   /// (indices into `points`): triangles for surfaces, tetrahedra for volumes.
@@ -385,7 +357,6 @@ struct Decoded {
   std::uint8_t version_major = 0, version_minor = 0;
   /// Levels the stream declares, and their point counts, coarsest first.
   std::vector<std::uint64_t> declared_points;
-  std::optional<VectorQuantizer> vector_quantizer;
   /// Decoded levels, coarsest first.
   std::vector<DecodedLevel> levels;
   /// True when the stream stopped before the requested level: `levels`

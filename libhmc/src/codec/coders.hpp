@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: AGPL-3.0-or-later
 // The layer coders of the format (spec 8 and 8A): the first byte of a BASE
 // or REFN payload. Declared here once; the layer coders (pointset/) and the
-// decoder's dispatch (codec/) use these numbers and nothing else. Since
-// spec 0.25 every other number is bad_layer.
+// decoder's dispatch (codec/) use these numbers and nothing else. Every
+// other number is bad_layer (BASE 1-4 and REFN 2-6 since spec 0.25, REFN 1
+// since 0.27).
 #pragma once
 
 #include <cstdint>
@@ -11,14 +12,13 @@ namespace hmc::detail {
 
 /// BASE coders (spec 8).
 enum class BaseCoder : std::uint8_t {
-  octree = 0,  ///< 8.2: one table per depth, no prediction (hmc enc --fast-decode)
-  ranked = 5   ///< 8.3: ranked occupancies at the depths that mark it (the default)
+  octree = 0,  ///< 8.1: one table per depth, no prediction (hmc enc --fast-decode)
+  ranked = 5   ///< 8.2: ranked occupancies at the depths that mark it (the default)
 };
 
 /// REFN coders (spec 8A).
 enum class RefineCoder : std::uint8_t {
   conditional_octree = 0,  ///< 8A.1 with the short header (no ranking fields, no pairing)
-  anchored_vq = 1,         ///< 8A.2, lossy (hmc enc --vq-bits)
   ranked_octree = 7        ///< 8A.1 with the full header (the default)
 };
 

@@ -13,7 +13,6 @@
 #include "delaunay/delaunay.hpp"
 #include "reconstruct/reconstruct.hpp"
 #include "pointset/octree.hpp"
-#include "pointset/anchored_vq.hpp"
 #include "pointset/refine.hpp"
 #include "util/error.hpp"
 #include "util/helpers.hpp"
@@ -47,7 +46,6 @@ struct ChunkWalker {
   const DecodeLimits& limits;
   std::optional<Header> header;
   std::optional<ScalarQuantizer> quantizer;
-  bool vq_seen = false;
   std::size_t layers = 0;  // layer chunks seen (BASE, then refinements)
   bool end_seen = false;
 
@@ -56,7 +54,7 @@ struct ChunkWalker {
   /// Levels complete so far: a layer, plus its RCON for surface and volume kinds.
   std::size_t complete() const { return needs_recon() ? recons : layers; }
 
-  enum class Action { skip, header, quantizer, vector_quantizer, layer, recon, end, info };
+  enum class Action { skip, header, quantizer, layer, recon, end, info };
 
   Action classify(const ChunkView& c) {
     const std::string name = to_string(c.type) + " chunk at offset " + std::to_string(c.offset);
@@ -83,12 +81,6 @@ struct ChunkWalker {
     if (!quantizer) fail(Status::bad_chunk, name + ": SQNT must come before it");
     if (needs_recon() && recons < layers && c.type != kRecon && is_critical(c.type))
       fail(Status::bad_chunk, name + ": the previous level's RCON must come first");
-    if (c.type == kVectorQuantizer) {
-      if (vq_seen) fail(Status::bad_chunk, name + ": second VQTB");
-      if (layers) fail(Status::bad_chunk, name + ": VQTB must come before the base layer");
-      vq_seen = true;
-      return Action::vector_quantizer;
-    }
     if (c.type == kBaseLayer) {
       if (layers) fail(Status::bad_chunk, name + ": second BASE");
       ++layers;
@@ -135,15 +127,10 @@ constexpr std::uint64_t kSimplexBytes = 16;
 // The n points that refinement layer `c` adds to `coarse`, decoded by the
 // coder its first byte names.
 std::vector<GridPoint> decode_layer(const ChunkView& c, int q, const std::vector<GridPoint>& coarse, std::uint64_t n,
-                                    TableForm tables, const VectorQuantizer* vq) {
+                                    TableForm tables) {
   if (c.length < 1) fail(Status::bad_layer, to_string(c.type) + ": empty payload");
-  const auto coder = static_cast<RefineCoder>(c.payload[0]);
   if (is_octree_refine_coder(c.payload[0]))
-    return decode_refinement(c.payload + 1, c.length - 1, q, coarse, n, tables, coder);
-  if (coder == RefineCoder::anchored_vq) {
-    if (!vq) fail(Status::bad_layer, "REFN: coder 1 (anchored VQ) needs the VQTB chunk, and the stream has none");
-    return decode_vq_layer(c.payload + 1, c.length - 1, q, coarse, *vq, n, tables);
-  }
+    return decode_refinement(c.payload + 1, c.length - 1, q, coarse, n, tables, static_cast<RefineCoder>(c.payload[0]));
   fail(Status::bad_layer, "REFN: unknown coder " + std::to_string(c.payload[0]));
 }
 
@@ -442,18 +429,16 @@ void ChunkDecoder::State::layers_ahead(const std::vector<GridPoint>& base, const
   std::deque<LayerSlot> made;
   for (std::size_t i = 0; i < layers.size(); ++i)
     made.push_back({layers[i].payload, promises[i].get_future()});
-  std::shared_ptr<const VectorQuantizer> vq;
-  if (out.vector_quantizer) vq = std::make_shared<const VectorQuantizer>(*out.vector_quantizer);
   const int q = walk.quantizer->bits;
   const TableForm tables = walk.header->tables;
   std::vector<std::uint64_t> added_counts;
   for (std::size_t i = 0; i < layers.size(); ++i) added_counts.push_back(counts[i + 1] - counts[i]);
   auto job = [promises = std::move(promises), layers = std::move(layers), added_counts = std::move(added_counts),
-              coarse = base, vq, q, tables]() mutable {
+              coarse = base, q, tables]() mutable {
     std::size_t i = 0;
     for (; i < promises.size(); ++i) {
       try {
-        std::vector<GridPoint> added = decode_layer(layers[i], q, coarse, added_counts[i], tables, vq.get());
+        std::vector<GridPoint> added = decode_layer(layers[i], q, coarse, added_counts[i], tables);
         if (i + 1 < promises.size()) {
           std::vector<GridPoint> finer(coarse.size() + added.size());
           std::merge(coarse.begin(), coarse.end(), added.begin(), added.end(), finer.begin());
@@ -526,7 +511,6 @@ bool ChunkDecoder::chunk_impl(const ChunkView& c) {
       out.declared_points = walk.header->points;
       break;
     case ChunkWalker::Action::quantizer: out.quantizer = *walk.quantizer; break;
-    case ChunkWalker::Action::vector_quantizer: out.vector_quantizer = read_vector_quantizer(c); break;
     case ChunkWalker::Action::info: out.info = parse_info(c); break;
     case ChunkWalker::Action::layer: {
       // Layers after the requested level are checked for order only.
@@ -547,8 +531,7 @@ bool ChunkDecoder::chunk_impl(const ChunkView& c) {
         auto ahead = s_->take_layer(c);  // the points decoded ahead, if any
         std::optional<std::vector<GridPoint>> added = ahead.valid() ? ahead.get() : std::nullopt;
         if (!added)
-          added = decode_layer(c, walk.quantizer->bits, coarse, counts[k] - counts[k - 1], walk.header->tables,
-                               out.vector_quantizer ? &*out.vector_quantizer : nullptr);
+          added = decode_layer(c, walk.quantizer->bits, coarse, counts[k] - counts[k - 1], walk.header->tables);
         level.points.resize(coarse.size() + added->size());
         std::merge(coarse.begin(), coarse.end(), added->begin(), added->end(), level.points.begin());
       }

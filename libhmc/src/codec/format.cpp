@@ -23,7 +23,7 @@ void expect_consumed(const ByteReader& r, const ChunkView& c) {
 }  // namespace
 
 bool is_known_chunk(const ChunkType& t) {
-  return t == kHead || t == kScalarQuantizer || t == kVectorQuantizer || t == kBaseLayer || t == kRefinement ||
+  return t == kHead || t == kScalarQuantizer || t == kBaseLayer || t == kRefinement ||
          t == kRecon || t == kEnd || t == kInfo;
 }
 
@@ -89,40 +89,6 @@ ScalarQuantizer read_scalar_quantizer(const ChunkView& c) {
   if (!std::isfinite(q.step) || !(q.step > 0)) fail(Status::bad_header, "SQNT: step is not a finite positive number");
   expect_consumed(r, c);
   return q;
-}
-
-std::vector<std::uint8_t> write_vector_quantizer(const VectorQuantizer& vq) {
-  ByteWriter w;
-  w.u8(3);
-  w.varint(vq.codebook.size());
-  for (const auto& v : vq.codebook)
-    for (std::int32_t x : v) w.svarint(x);
-  return std::move(w.data());
-}
-
-VectorQuantizer read_vector_quantizer(const ChunkView& c) {
-  ByteReader r(c.payload, c.length, Status::bad_header, "VQTB");
-  const std::uint8_t dim = r.u8();
-  if (dim != 3) fail(Status::bad_header, "VQTB: dimension " + std::to_string(dim) + " is not 3");
-  const std::uint64_t k = r.varint();
-  if (k < 1 || k > kMaxCodebookSize)
-    fail(Status::bad_header, "VQTB: codebook size " + std::to_string(k) + " is outside 1..65536");
-  // Each entry needs at least three bytes: refuse before allocating.
-  if (k * 3 > r.remaining())
-    fail(Status::bad_header, "VQTB: " + std::to_string(k) + " entries cannot fit in " +
-                                 std::to_string(r.remaining()) + " bytes");
-  VectorQuantizer vq;
-  vq.codebook.resize(k);
-  constexpr std::int64_t kLimit = (std::int64_t{1} << kMaxBits) - 1;
-  for (auto& v : vq.codebook)
-    for (std::int32_t& x : v) {
-      const std::int64_t s = r.svarint();
-      if (s < -kLimit || s > kLimit)
-        fail(Status::bad_header, "VQTB: component " + std::to_string(s) + " is outside ±(2^21 - 1)");
-      x = static_cast<std::int32_t>(s);
-    }
-  expect_consumed(r, c);
-  return vq;
 }
 
 namespace {

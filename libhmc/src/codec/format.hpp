@@ -18,7 +18,6 @@ namespace hmc::detail {
 
 inline constexpr ChunkType kHead = chunk_type("HEAD");
 inline constexpr ChunkType kScalarQuantizer = chunk_type("SQNT");
-inline constexpr ChunkType kVectorQuantizer = chunk_type("VQTB");
 inline constexpr ChunkType kBaseLayer = chunk_type("BASE");
 inline constexpr ChunkType kRecon = chunk_type("RCON");
 inline constexpr ChunkType kRefinement = chunk_type("REFN");
@@ -31,7 +30,6 @@ bool is_known_chunk(const ChunkType& t);
 constexpr int kMinBits = 1;
 constexpr int kMaxBits = 21;
 constexpr std::uint32_t kMaxLevels = 64;
-constexpr std::uint32_t kMaxCodebookSize = 65536;
 
 /// HEAD: kind, reserved flags, level count and per-level point counts.
 struct Header {
@@ -47,9 +45,6 @@ struct Header {
 
 std::vector<std::uint8_t> write_scalar_quantizer(const ScalarQuantizer& q);
 ScalarQuantizer read_scalar_quantizer(const ChunkView& c);
-
-std::vector<std::uint8_t> write_vector_quantizer(const VectorQuantizer& vq);
-VectorQuantizer read_vector_quantizer(const ChunkView& c);
 
 /// RCON: reconstruction side information of one level with `points` points.
 std::vector<std::uint8_t> write_recon(const ReconParams& p);

@@ -16,7 +16,7 @@ namespace hmc::detail {
 
 constexpr std::uint8_t kSignature[8] = {0x89, 'H', 'M', 'C', 0x0D, 0x0A, 0x1A, 0x0A};
 constexpr std::uint8_t kVersionMajor = 0;
-constexpr std::uint8_t kVersionMinor = 26;
+constexpr std::uint8_t kVersionMinor = 27;
 constexpr std::uint32_t kMaxChunkLength = 0x7fffffffu;
 constexpr std::size_t kPreambleSize = 10;       // signature + major + minor
 constexpr std::size_t kChunkOverhead = 12;      // type + length + CRC

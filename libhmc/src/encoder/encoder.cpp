@@ -5,13 +5,11 @@
 #include <map>
 #include <optional>
 #include <string>
-#include <unordered_map>
 
 #include "codec/format.hpp"
 #include "encoder/input_grid.hpp"
 #include "encoder/hierarchy/hierarchy.hpp"
 #include "pointset/refine.hpp"
-#include "pointset/anchored_vq.hpp"
 #include "delaunay/delaunay.hpp"
 #include "encoder/tuning.hpp"
 #include "encoder/winding.hpp"
@@ -104,9 +102,10 @@ std::vector<std::uint32_t> index_in(const std::vector<GridPoint>& points, const 
   return idx;
 }
 
-// Where the decoder puts the input of a lossy level: each finest input
-// point's index in the level (~0u: not in it) and position (grid units),
-// and the input surface carried over to those positions.
+// Where the input stands on a level whose points are not all input points
+// (a level of octree cells, clustered_target): each finest input point's
+// index in the level (~0u: not in it) and position (grid units), and the
+// input surface carried over to those positions.
 struct LossyTarget {
   std::vector<std::uint32_t> index;
   std::vector<Vec3> positions;
@@ -115,10 +114,9 @@ struct LossyTarget {
 
 // Reconstruction side information and result for one level. The target is
 // the input surface: at its own points when the level's points are input
-// points (exact layers), at the decoded points otherwise (`lossy`): the
-// encoder knows where each input point went, so it carries the input's
-// faces over to the decoded points and tunes against that surface just as
-// for an exact level. Coarser levels only approximate the input: unless the
+// points, carried over to the level's points otherwise (`carried`, a level of
+// octree cells): the encoder knows where each input point went, so it
+// tunes against that surface just as for a level of input points. Coarser levels only approximate the input: unless the
 // fidelity is exact, they keep the rule's labels and let the decoder's
 // repair mend what makes the surface unsound; when `fit` (fit_coarse_levels,
 // levels of octree cells) they follow the input as the finest level does,
@@ -126,13 +124,13 @@ struct LossyTarget {
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
                          const EncodeOptions& options, bool fit, const LevelPlan* finest,
-                         const LossyTarget* lossy = nullptr,
+                         const LossyTarget* carried = nullptr,
                          WindingCache* winding = nullptr, HelperBudget* helpers = nullptr) {
   const Fidelity fidelity = options.fidelity;
   const bool coarser = finest != nullptr;
-  const auto idx = lossy ? lossy->index : index_in(fine_points, plan.points);
-  const std::vector<Vec3>& surface_gp = lossy ? lossy->positions : fine_gp;
-  const std::vector<Triangle>& surface = lossy ? lossy->surface : fine.surface;
+  const auto idx = carried ? carried->index : index_in(fine_points, plan.points);
+  const std::vector<Vec3>& surface_gp = carried ? carried->positions : fine_gp;
+  const std::vector<Triangle>& surface = carried ? carried->surface : fine.surface;
   std::vector<Triangle> faces;  // input faces whose vertices all survive, on this level
   for (const auto& f : surface) {
     const Triangle g{idx[f[0]], idx[f[1]], idx[f[2]]};
@@ -142,10 +140,10 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   TuneInput ti;
   double unsure = 0;
   if (!surface.empty())
-    ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, lossy ? nullptr : winding, false, &unsure, seal);
+    ti.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, carried ? nullptr : winding, false, &unsure, seal);
   if (kind == Kind::surface) {
     // Level indices: ascending (RCON gap-codes the list) and distinct. A
-    // lossy level's points are not in the input's order.
+    // cell level's points are not in the input's order.
     for (auto v : fine.border)
       if (idx[v] != ~0u) ti.border.push_back(idx[v]);
     std::sort(ti.border.begin(), ti.border.end());
@@ -163,8 +161,8 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   // it, and so does any fidelity but the rule's when asked to fit them.
   ti.approximate = coarser && fidelity != Fidelity::exact && !(fit && fidelity != Fidelity::rule);
   const bool closed = kind == Kind::volume || fine.border.empty();
-  if (!ti.approximate && (lossy || ((fidelity == Fidelity::shape || fidelity == Fidelity::topology) && closed))) {
-    // The target can be unsound (a lossy level's carried surface folds where
+  if (!ti.approximate && (carried || ((fidelity == Fidelity::shape || fidelity == Fidelity::topology) && closed))) {
+    // The target can be unsound (a cell level's carried surface folds where
     // points moved; input triangles missing from the Delaunay leave pinches
     // and non-manifold edges): tuning mends the labels it gives and aims at
     // the input's topology (closed inputs only: the interface of an open one
@@ -189,7 +187,7 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
   // and keep whichever sends less side information. A generated
   // 1,600-point height field at q = 12: side information 13.5 -> 7.9 bits
   // per point, 78 % -> 95 % of the reachable triangles.
-  if (kind == Kind::surface && !coarser && !lossy && !fine.border.empty() && unsure > kSheetUnsure) {
+  if (kind == Kind::surface && !coarser && !carried && !fine.border.empty() && unsure > kSheetUnsure) {
     TuneInput sheet = ti;
     sheet.truth = truth_labels(plan.points, dt, surface_gp, surface, faces, winding, true, nullptr, seal);
     TuningReport sheet_tr;
@@ -269,157 +267,6 @@ std::vector<std::uint8_t> recon_payload(const ReconParams& params, const std::ve
   return delta.size() < full.size() ? delta : full;
 }
 
-// Candidate anchors per point of a lossy layer (its nearest coarse points).
-constexpr int kVqAnchors = 4;
-constexpr int kMaxVqBits = 10;
-
-std::uint64_t pack_point(const GridPoint& p) {
-  return (std::uint64_t{p[0]} << 42) | (std::uint64_t{p[1]} << 21) | p[2];
-}
-
-// Lossy refinement layers (EncodeOptions::vq_bits): trains the codebook on
-// the planned levels, codes the layers coarsest first against the points
-// the decoder will have, replaces each level's points by those and
-// re-plans its reconstruction on them. payloads[i] receives the REFN
-// payload of plans[i]. A layer whose every point had to be dropped removes
-// its level. Returns the codebook (empty when no layer uses it).
-VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vector<std::uint8_t>>& payloads, Kind kind,
-                           int q, const EncodeOptions& options, const InputOnGrid& fine,
-                           const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp) {
-  std::vector<VqTrainingLayer> training;
-  for (std::size_t i = plans.size() - 1; i-- > 0;) training.push_back({&plans[i + 1].points, &plans[i].added});
-  const VectorQuantizer vq = train_layer_codebook(training, options.vq_bits, kVqAnchors);
-  VqLayerOptions lo;
-  lo.step = options.vq_residual;
-  lo.anchors = kVqAnchors;
-
-  payloads.assign(plans.size(), {});
-  std::vector<std::vector<std::uint8_t>> octree_payloads(plans.size());  // exact layers coded by coder 1: coder 0's
-  std::unordered_map<std::uint64_t, GridPoint> placed;  // input point -> decoded point, lossy layers only
-  std::unordered_map<std::uint64_t, bool> dropped;
-  bool exact = true;       // every level so far decoded to the input's points
-  bool vq_used = false;
-  std::vector<GridPoint> decoded = plans.back().points;  // the base layer is exact
-  for (std::size_t i = plans.size() - 1; i-- > 0;) {
-    LevelPlan& plan = plans[i];
-    // `decoded` holds the coarser levels as the decoder has them: a point a
-    // coarser lossy layer placed may sit on an input point of this layer.
-    // That input point is not "already present" (the point there stands for
-    // another input point), so encode_vq_layer places it like any point
-    // whose best code is taken: at the nearest free grid point it can reach,
-    // or it is dropped. Either way the layer's points are distinct and none
-    // is a coarse point (spec 8A.2), and each input point keeps a decoded
-    // point of its own, which the reconstruction below relies on.
-    VqLayer layer = encode_vq_layer(decoded, plan.added, vq, q, lo);
-    std::vector<GridPoint> added;
-    bool layer_exact = layer.dropped == 0;
-    for (std::size_t j = 0; j < plan.added.size(); ++j) {
-      if (!layer.kept[j]) {
-        dropped[pack_point(plan.added[j])] = true;
-        continue;
-      }
-      added.push_back(layer.decoded[j]);
-      if (layer.decoded[j] != plan.added[j]) layer_exact = false;
-      placed[pack_point(plan.added[j])] = layer.decoded[j];
-    }
-    if (added.empty()) {  // nothing left of this level
-      plans.erase(plans.begin() + static_cast<std::ptrdiff_t>(i));
-      payloads.erase(payloads.begin() + static_cast<std::ptrdiff_t>(i));
-      octree_payloads.erase(octree_payloads.begin() + static_cast<std::ptrdiff_t>(i));
-      continue;
-    }
-    std::vector<std::uint8_t>& payload = payloads[i];
-    payload.push_back(static_cast<std::uint8_t>(RefineCoder::anchored_vq));
-    payload.insert(payload.end(), layer.bytes.begin(), layer.bytes.end());
-    if (exact && layer_exact) {
-      // Both coders are exact here: keep the smaller (and the other, in
-      // case the codebook costs more than coder 1 saves: see below).
-      const RefinementLayer exact_layer = encode_refinement_layer(decoded, plan.added, q, options.fast_decode);
-      std::vector<std::uint8_t> octree{exact_layer.coder};
-      octree.insert(octree.end(), exact_layer.bytes.begin(), exact_layer.bytes.end());
-      if (octree.size() < payload.size()) std::swap(octree, payload);
-      if (payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq)) octree_payloads[i] = std::move(octree);
-    }
-    const bool lossy_layer = payload[0] == static_cast<std::uint8_t>(RefineCoder::anchored_vq);
-    vq_used = vq_used || lossy_layer;
-    LevelReport& lr = plan.report;
-    lr.coder = payload[0];
-    if (lossy_layer) {
-      lr.max_error = layer.max_error;
-      lr.rms_error = std::sqrt(layer.sum_error2 / static_cast<double>(added.size()));
-      lr.dropped_points = layer.dropped;
-    }
-    const std::vector<GridPoint> original = plan.points;
-    sort_canonical(added);
-    std::vector<GridPoint> level(decoded.size() + added.size());
-    std::merge(decoded.begin(), decoded.end(), added.begin(), added.end(), level.begin());
-    plan.points = std::move(level);
-    plan.added = std::move(added);
-    decoded = plan.points;
-    exact = exact && layer_exact;
-    if (exact || kind == Kind::points) continue;
-    // Reconstruction on the decoded points: each input point of the level
-    // is where the decoder puts it; input points of finer levels are still
-    // where the input has them. On the finest level a dropped point is
-    // merged into the decoded point nearest to it (its faces collapse, as
-    // in an edge collapse), so the carried surface keeps no hole; on
-    // coarser levels it is simply absent, like the finer levels' points.
-    const auto member = index_in(fine_points, original);
-    LossyTarget target;
-    target.index.assign(fine_points.size(), ~0u);
-    target.positions = fine_gp;
-    std::vector<KdTree<std::int64_t>::Point> level_ip;
-    KdTree<std::int64_t> level_tree;
-    if (i == 0 && !dropped.empty()) {
-      level_ip.reserve(plan.points.size());
-      for (const auto& p : plan.points) level_ip.push_back({std::int64_t{p[0]}, std::int64_t{p[1]}, std::int64_t{p[2]}});
-      level_tree = KdTree<std::int64_t>(level_ip);
-    }
-    for (std::size_t f = 0; f < fine_points.size(); ++f) {
-      if (member[f] == ~0u) continue;
-      const std::uint64_t key = pack_point(fine_points[f]);
-      std::uint32_t at_index = ~0u;
-      if (dropped.count(key)) {
-        if (i != 0) continue;
-        const auto& p = fine_points[f];
-        at_index = level_tree.nearest({std::int64_t{p[0]}, std::int64_t{p[1]}, std::int64_t{p[2]}}).index;
-      } else {
-        const auto it = placed.find(key);
-        const GridPoint at = it == placed.end() ? fine_points[f] : it->second;
-        at_index = static_cast<std::uint32_t>(std::lower_bound(plan.points.begin(), plan.points.end(), at) - plan.points.begin());
-      }
-      target.index[f] = at_index;
-      const GridPoint& g = plan.points[at_index];
-      target.positions[f] = {double(g[0]), double(g[1]), double(g[2])};
-    }
-    for (const auto& t : fine.surface) {
-      const Vec3 &a = target.positions[t[0]], &b = target.positions[t[1]], &c = target.positions[t[2]];
-      if (a != b && b != c && a != c) target.surface.push_back(t);
-    }
-    const Tetrahedralization dt = delaunay(plan.points);
-    plan_reconstruction(plan, dt, kind, fine, fine_points, fine_gp, options, options.fit_coarse_levels,
-                        i > 0 ? &plans.front() : nullptr,
-                        &target);
-    lr.simplices = kind == Kind::surface ? plan.rec.triangles.size() : plan.rec.tetrahedra.size();
-  }
-  // Every layer exact: coder 1 must also pay for the codebook.
-  if (exact && vq_used) {
-    std::size_t saved = 0;
-    for (std::size_t i = 0; i < payloads.size(); ++i)
-      if (!octree_payloads[i].empty()) saved += octree_payloads[i].size() - payloads[i].size();
-    if (saved <= write_vector_quantizer(vq).size() + kChunkOverhead) {
-      for (std::size_t i = 0; i < payloads.size(); ++i)
-        if (!octree_payloads[i].empty()) {
-          payloads[i] = std::move(octree_payloads[i]);
-          plans[i].report.coder = payloads[i][0];
-        }
-      vq_used = false;
-    }
-  }
-  for (std::size_t k = 0; k < plans.size(); ++k) plans[k].report.lod = static_cast<int>(k);
-  return vq_used ? vq : VectorQuantizer{};
-}
-
 // With a helper thread free (EncodeOptions::threads > 1), each point layer
 // is coded there as soon as its two levels are known (a refinement layer
 // once its level is decimated, the base layer when the coarsest level's
@@ -429,7 +276,7 @@ VectorQuantizer plan_lossy(std::vector<LevelPlan>& plans, std::vector<std::vecto
 // start (no helper free) is coded by the caller when it is written.
 class LayerJobs {
  public:
-  LayerJobs(bool on, HelperBudget& helpers) : on_(on), helpers_(helpers) {}
+  explicit LayerJobs(HelperBudget& helpers) : helpers_(helpers) {}
   LayerJobs(const LayerJobs&) = delete;
   LayerJobs& operator=(const LayerJobs&) = delete;
   ~LayerJobs() {
@@ -437,7 +284,6 @@ class LayerJobs {
   }
   template <class Job>
   void start(std::size_t index, Job job) {
-    if (!on_) return;
     auto f = helpers_.try_run(std::move(job));
     if (f.valid()) jobs_[index] = std::move(f);
   }
@@ -450,7 +296,6 @@ class LayerJobs {
   }
 
  private:
-  bool on_;
   HelperBudget& helpers_;
   std::map<std::size_t, std::future<RefinementLayer>> jobs_;
 };
@@ -499,12 +344,6 @@ DecimationResult octree_cells(const std::vector<GridPoint>& points, int q) {
 
 Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   check_connectivity(input);
-  if (options.vq_bits < 0 || options.vq_bits > kMaxVqBits)
-    fail(Status::invalid_argument, "vq bits must be between 0 and 10, got " + std::to_string(options.vq_bits));
-  if (options.vq_residual > (std::uint32_t{1} << 21) - 1)
-    fail(Status::invalid_argument, "vq residual step must be at most 2^21 - 1");
-  if (options.vq_bits > 0 && options.levels < 2)
-    fail(Status::invalid_argument, "lossy refinement (vq bits) needs at least 2 levels: the base level stays exact");
   if (options.levels < 1 || options.levels > static_cast<int>(kMaxLevels))
     fail(Status::invalid_argument, "levels must be between 1 and 64, got " + std::to_string(options.levels));
   if (!(options.removal_ratio > 0 && options.removal_ratio <= 1))
@@ -555,7 +394,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   HelperBudget helpers(options.threads);  // outlives every job below
   WindingCache winding;  // the input surface's winding numbers, from one level to the next
   winding.helpers = &helpers;
-  LayerJobs jobs(options.vq_bits == 0, helpers);  // lossy layers are planned apart
+  LayerJobs jobs(helpers);
   const BaseCoder base_coder = options.fast_decode ? BaseCoder::octree : BaseCoder::ranked;
   std::string stopped;  // why a level before the last requested one is the coarsest
   // EncodeOptions::preview_ratio: below the independent-set levels, levels
@@ -646,19 +485,10 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   winding = WindingCache{};
   // The coarsest level adds nothing to a coarser one.
   plans.back().added.clear();
-  std::vector<std::vector<std::uint8_t>> lossy_payloads;  // REFN payloads of plan_lossy, by plan
-  VectorQuantizer codebook;
-  const std::size_t planned = plans.size();
-  if (options.vq_bits > 0 && plans.size() > 1)
-    codebook = plan_lossy(plans, lossy_payloads, rep.kind, q, options, fine, fine_points, fine_gp);
-  rep.codebook_size = codebook.codebook.size();
   const std::string written = std::to_string(plans.size()) + " of the " + std::to_string(options.levels) +
                               " levels requested";
   if (!stopped.empty())
     rep.notes.push_back(written + ": level " + std::to_string(plans.size() - 1) + " is the coarsest, as " + stopped);
-  if (plans.size() < planned)
-    rep.notes.push_back((stopped.empty() ? written + ": " : std::string()) + std::to_string(planned - plans.size()) +
-                        " planned level(s) left out, as their lossy layers placed none of their points");
 
   Header header;
   header.kind = rep.kind;
@@ -668,7 +498,6 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
   w.chunk(kHead, header.write());
   w.chunk(kScalarQuantizer, write_scalar_quantizer(rep.quantizer));
   if (options.write_info) w.chunk(kInfo, info_payload(rep));
-  if (!codebook.codebook.empty()) w.chunk(kVectorQuantizer, write_vector_quantizer(codebook));
   for (std::size_t i = plans.size(); i-- > 0;) {
     LevelPlan& plan = plans[i];
     LevelReport& level = plan.report;
@@ -679,9 +508,6 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
       layer.bytes(coded ? coded->bytes : encode_base(plan.points, q, base_coder, &helpers));
       w.chunk(kBaseLayer, layer.data());
       level.new_points = plan.points.size();
-    } else if (!lossy_payloads.empty()) {
-      w.chunk(kRefinement, lossy_payloads[i]);
-      level.new_points = plans[i].added.size();
     } else {
       const RefinementLayer refinement =
           coded ? std::move(*coded) : encode_refinement_layer(plans[i + 1].points, plans[i].added, q, options.fast_decode);

@@ -398,7 +398,7 @@ std::vector<std::uint32_t> hole_faces(const std::vector<GridPoint>& points, cons
   return drops;
 }
 
-// Encoder-side cleanup of a target labelling (lossy levels): the input's
+// Encoder-side cleanup of a target labelling (levels of octree cells): the input's
 // surface carried over to the decoded points can fold where points moved,
 // and its winding-number labels then leave pinch points, non-manifold
 // edges or points off the surface. A greedy local search flips tetrahedra
@@ -1104,7 +1104,7 @@ ReconParams tune(const std::vector<GridPoint>& points, const Tetrahedralization&
           if (labels[t] != truth[t]) toggled[t] = 1, labels[t] = truth[t];
     }
     if (in.clean_target) {
-      // The target itself may be unsound: a lossy level's carried surface
+      // The target itself may be unsound: a cell level's carried surface
       // folds, and where input triangles are not Delaunay the winding-number
       // labels can pinch or leave non-manifold edges. Mend it, and keep the
       // result if it is sounder, counting a topology other than the input's

@@ -127,7 +127,7 @@ struct TuneInput {
   /// the finest level's input); components 0: unknown.
   std::size_t target_components = 0;
   long target_euler = 0;
-  /// The truth may be unsound (a lossy level: the input's surface carried
+  /// The truth may be unsound (a level of octree cells: the input's surface carried
   /// over to the decoded points, which can fold): after following it, mend
   /// its defects and steer towards the target topology before toggling.
   bool clean_target = false;

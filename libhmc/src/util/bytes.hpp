@@ -31,9 +31,6 @@ class ByteWriter {
     }
     buf_.push_back(static_cast<std::uint8_t>(v));
   }
-  void svarint(std::int64_t v) {
-    varint((static_cast<std::uint64_t>(v) << 1) ^ static_cast<std::uint64_t>(v >> 63));
-  }
   void bytes(const std::uint8_t* p, std::size_t n) { buf_.insert(buf_.end(), p, p + n); }
   void bytes(const std::vector<std::uint8_t>& v) { bytes(v.data(), v.size()); }
 
@@ -84,10 +81,6 @@ class ByteReader {
         return v;
       }
     }
-  }
-  std::int64_t svarint() {
-    std::uint64_t u = varint();
-    return static_cast<std::int64_t>((u >> 1) ^ (~(u & 1) + 1));
   }
   void skip(std::size_t n) {
     need(n);

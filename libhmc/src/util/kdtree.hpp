@@ -2,8 +2,8 @@
 // Exact k-nearest-neighbour search in 3D with a deterministic tie rule:
 // equal distances go to the smaller index (the position in the vector the
 // tree was built from). Used with integer coordinates (exact squared
-// distances) by the anchored vector-quantizer coder, and with doubles by the
-// codebook training, which is encoder-only.
+// distances) by the encoder, which clusters the input onto the points of a
+// level of octree cells, and by the tests and benches.
 #pragma once
 
 #include <algorithm>
