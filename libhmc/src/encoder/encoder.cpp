@@ -106,7 +106,7 @@ std::vector<std::uint32_t> index_in(const std::vector<GridPoint>& points, const 
 // (a level of octree cells, clustered_target): each finest input point's
 // index in the level (~0u: not in it) and position (grid units), and the
 // input surface carried over to those positions.
-struct LossyTarget {
+struct CarriedTarget {
   std::vector<std::uint32_t> index;
   std::vector<Vec3> positions;
   std::vector<Triangle> surface;  // the input's faces (finest indices), those that do not collapse
@@ -114,17 +114,17 @@ struct LossyTarget {
 
 // Reconstruction side information and result for one level. The target is
 // the input surface: at its own points when the level's points are input
-// points, carried over to the level's points otherwise (`carried`, a level of
-// octree cells): the encoder knows where each input point went, so it
-// tunes against that surface just as for a level of input points. Coarser levels only approximate the input: unless the
-// fidelity is exact, they keep the rule's labels and let the decoder's
-// repair mend what makes the surface unsound; when `fit` (fit_coarse_levels,
-// levels of octree cells) they follow the input as the finest level does,
-// aiming at its topology.
+// points, carried over to the level's points otherwise (`carried`, a level
+// of octree cells): the encoder knows where each input point went, so it
+// tunes against that surface just as for a level of input points. Coarser
+// levels only approximate the input: unless the fidelity is exact, they
+// keep the rule's labels and let the decoder's repair mend what makes the
+// surface unsound; when `fit` (fit_coarse_levels, levels of octree cells)
+// they follow the input as the finest level does, aiming at its topology.
 void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kind, const InputOnGrid& fine,
                          const std::vector<GridPoint>& fine_points, const std::vector<Vec3>& fine_gp,
                          const EncodeOptions& options, bool fit, const LevelPlan* finest,
-                         const LossyTarget* carried = nullptr,
+                         const CarriedTarget* carried = nullptr,
                          WindingCache* winding = nullptr, HelperBudget* helpers = nullptr) {
   const Fidelity fidelity = options.fidelity;
   const bool coarser = finest != nullptr;
@@ -208,13 +208,13 @@ void plan_reconstruction(LevelPlan& plan, const Tetrahedralization& dt, Kind kin
 // level's point nearest to it, the faces that do not collapse kept. Few
 // input faces keep all three vertices on such a level, so those alone
 // would be no target.
-LossyTarget clustered_target(const std::vector<GridPoint>& level, const std::vector<GridPoint>& fine_points,
+CarriedTarget clustered_target(const std::vector<GridPoint>& level, const std::vector<GridPoint>& fine_points,
                              const InputOnGrid& fine) {
   std::vector<KdTree<std::int64_t>::Point> ip;
   ip.reserve(level.size());
   for (const auto& p : level) ip.push_back({std::int64_t{p[0]}, std::int64_t{p[1]}, std::int64_t{p[2]}});
   const KdTree<std::int64_t> tree(ip);
-  LossyTarget target;
+  CarriedTarget target;
   target.index.resize(fine_points.size());
   target.positions.resize(fine_points.size());
   for (std::size_t f = 0; f < fine_points.size(); ++f) {
@@ -417,7 +417,7 @@ Encoded encode_impl(const Mesh& input, const EncodeOptions& options) {
     Tetrahedralization dt;
     if (rep.kind != Kind::points || more) dt = delaunay(plan.points);
     if (rep.kind != Kind::points) {
-      std::optional<LossyTarget> clustered;
+      std::optional<CarriedTarget> clustered;
       // Levels of octree cells are few points: fitting them to the input
       // costs little (2 % of the stream on the shared models) and makes the
       // preview look like the model.
